@@ -1,0 +1,85 @@
+// What a scene file says, in SI units, after loading and validation.
+// JSON -> SceneSpec (this file) -> compiled fluid model (sph/model.h) -> state.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "sphfem/core/vec.h"
+
+namespace sphfem {
+
+enum class SolverKind { WCSPH, DFSPH };
+enum class KernelKind { CubicSpline, WendlandC2 };
+
+struct SimulationSpec {
+  double duration = 1.0;              // s, simulated time
+  double dt_min = 1e-6;               // s, below this the run stops as unstable
+  double dt_max = 2e-3;               // s, upper bound of the adaptive step
+  double cfl = 0.4;                   // Courant number on the particle spacing
+  SolverKind solver = SolverKind::DFSPH;
+  Vec3d gravity{0.0, -9.81, 0.0};     // m/s^2
+  double density_tolerance = 1e-3;    // DFSPH: mean relative density error target
+  double divergence_tolerance = 1e-3; // DFSPH: mean relative density change per step from div v
+  int max_iterations = 100;           // DFSPH: cap on pressure iterations per solve
+};
+
+struct FluidBlockSpec {
+  Vec3d lo, hi;        // m, box filled with particles on a cubic lattice
+  Vec3d velocity;      // m/s, initial velocity
+};
+
+struct EmitterSpec {
+  Vec3d position;      // m, nozzle centre
+  Vec3d direction{0.0, -1.0, 0.0};  // unit after loading
+  double radius = 0.02;  // m, nozzle radius
+  double speed = 1.0;    // m/s, outflow speed
+  double start = 0.0;    // s
+  double end = 1e30;     // s
+};
+
+struct FluidSpec {
+  double particle_radius = 0.0125;  // m; lattice spacing is twice this
+  double rest_density = 1000.0;     // kg/m^3
+  double viscosity = 1e-6;          // m^2/s, physical kinematic viscosity
+  double xsph = 0.0;                // XSPH velocity smoothing factor, 0..1
+  double artificial_viscosity = 0.0;// Monaghan alpha, 0 = off
+  double stiffness = 0.0;           // Pa, WCSPH p = k (rho/rho0 - 1); 0 = derive from max speed
+  double max_speed = 0.0;           // m/s, expected speed for deriving stiffness (0 = from heights)
+  KernelKind kernel = KernelKind::CubicSpline;
+  std::vector<FluidBlockSpec> blocks;
+  std::vector<EmitterSpec> emitters;
+  int max_particles = 0;            // capacity for emitters; 0 = estimate from emitters
+};
+
+struct DomainSpec {
+  Vec3d lo{0.0, 0.0, 0.0};  // m, inner corner of the tank
+  Vec3d hi{1.0, 1.0, 1.0};  // m
+  bool open_top = false;     // no lid: particles above hi.y are still clamped to the domain
+};
+
+struct OutputSpec {
+  double fps = 30.0;        // frames per simulated second
+  bool vtu = true;          // VTK XML unstructured grid frames (ParaView)
+  bool ply = false;         // binary PLY point frames (Houdini, MeshLab)
+};
+
+enum class GaugeKind { Pressure, Height };
+
+struct GaugeSpec {
+  std::string name;
+  GaugeKind kind = GaugeKind::Pressure;
+  Vec3d position;  // m; for Height only x and z are used
+};
+
+struct SceneSpec {
+  std::string path;  // file it was loaded from ("" when built in code)
+  std::string name;
+  SimulationSpec simulation;
+  FluidSpec fluid;
+  DomainSpec domain;
+  OutputSpec output;
+  std::vector<GaugeSpec> gauges;
+};
+
+}  // namespace sphfem

@@ -1,0 +1,55 @@
+// Uniform cell grid of cell size h over the padded domain. Particles are sorted by the
+// linear cell index (x fastest), so the three cells of a row are one contiguous range and
+// a neighbour query visits 9 ranges instead of 27 cells.
+#pragma once
+
+#include <cstdint>
+
+#include "sphfem/core/vec.h"
+
+namespace sphfem {
+
+struct GridView {
+  Vec3 lo;         // corner of cell (0,0,0)
+  Real inv_cell;   // 1 / cell size
+  int nx = 0, ny = 0, nz = 0;
+  const std::uint32_t* start = nullptr;  // nx*ny*nz + 1 entries; cell c holds [start[c], start[c+1])
+
+  SPHFEM_HD int clampi(int v, int hi) const { return v < 0 ? 0 : (v > hi ? hi : v); }
+  SPHFEM_HD void coords(const Vec3& p, int& ix, int& iy, int& iz) const {
+    ix = clampi(int((p.x - lo.x) * inv_cell), nx - 1);
+    iy = clampi(int((p.y - lo.y) * inv_cell), ny - 1);
+    iz = clampi(int((p.z - lo.z) * inv_cell), nz - 1);
+  }
+  SPHFEM_HD std::uint32_t cell(const Vec3& p) const {
+    int ix, iy, iz;
+    coords(p, ix, iy, iz);
+    return std::uint32_t((iz * ny + iy) * nx + ix);
+  }
+  SPHFEM_HD int cells() const { return nx * ny * nz; }
+};
+
+// Calls f(j, rij, r2) for every particle j of `xs` (sorted into grid g) with
+// |xi - xj|^2 < h2, i itself included.
+template <class F>
+SPHFEM_HD void for_neighbors(const GridView& g, const Vec3* xs, const Vec3& xi, Real h2, F&& f) {
+  if (g.nx == 0) return;
+  int ix, iy, iz;
+  g.coords(xi, ix, iy, iz);
+  const int x0 = ix > 0 ? ix - 1 : 0;
+  const int x1 = ix < g.nx - 1 ? ix + 1 : g.nx - 1;
+  const int z0 = iz > 0 ? iz - 1 : 0, z1 = iz < g.nz - 1 ? iz + 1 : g.nz - 1;
+  const int y0 = iy > 0 ? iy - 1 : 0, y1 = iy < g.ny - 1 ? iy + 1 : g.ny - 1;
+  for (int z = z0; z <= z1; ++z)
+    for (int y = y0; y <= y1; ++y) {
+      const int row = (z * g.ny + y) * g.nx;
+      const std::uint32_t end = g.start[row + x1 + 1];
+      for (std::uint32_t j = g.start[row + x0]; j < end; ++j) {
+        const Vec3 rij = xi - xs[j];
+        const Real r2 = norm2(rij);
+        if (r2 < h2) f(j, rij, r2);
+      }
+    }
+}
+
+}  // namespace sphfem

@@ -1,0 +1,75 @@
+// SPH smoothing kernels in 3D with support radius h (W = 0 for r >= h).
+// Cubic spline as in Monaghan (1992) rescaled to support h; Wendland C2 (Wendland 1995;
+// Dehnen & Aly 2012). Both normalised: the integral of W over R^3 is 1.
+#pragma once
+
+#include "sphfem/core/vec.h"
+
+namespace sphfem {
+
+struct CubicSpline {
+  Real h, inv_h, k, l;
+  CubicSpline() = default;
+  explicit CubicSpline(Real h_) : h(h_), inv_h(Real(1) / h_) {
+    const Real pi = Real(3.14159265358979323846);
+    k = Real(8) / (pi * h * h * h);
+    l = Real(48) / (pi * h * h * h);
+  }
+  SPHFEM_HD Real W(Real r) const {
+    const Real q = r * inv_h;
+    if (q >= Real(1)) return Real(0);
+    if (q <= Real(0.5)) return k * (Real(6) * q * q * q - Real(6) * q * q + Real(1));
+    const Real f = Real(1) - q;
+    return k * Real(2) * f * f * f;
+  }
+  // Gradient with respect to x_i of W(|x_i - x_j|), given rij = x_i - x_j and r = |rij|.
+  SPHFEM_HD Vec3 grad(const Vec3& rij, Real r) const {
+    const Real q = r * inv_h;
+    if (q >= Real(1) || r <= Real(1e-9) * h) return Vec3();
+    Real dq;
+    if (q <= Real(0.5))
+      dq = l * q * (Real(3) * q - Real(2));
+    else {
+      const Real f = Real(1) - q;
+      dq = -l * f * f;
+    }
+    return rij * (dq * inv_h / r);
+  }
+};
+
+struct WendlandC2 {
+  Real h, inv_h, k;
+  WendlandC2() = default;
+  explicit WendlandC2(Real h_) : h(h_), inv_h(Real(1) / h_) {
+    const Real pi = Real(3.14159265358979323846);
+    k = Real(21) / (Real(2) * pi * h * h * h);
+  }
+  SPHFEM_HD Real W(Real r) const {
+    const Real q = r * inv_h;
+    if (q >= Real(1)) return Real(0);
+    const Real f = Real(1) - q;
+    return k * f * f * f * f * (Real(1) + Real(4) * q);
+  }
+  SPHFEM_HD Vec3 grad(const Vec3& rij, Real r) const {
+    const Real q = r * inv_h;
+    if (q >= Real(1)) return Vec3();
+    const Real f = Real(1) - q;
+    // dW/dr = -20 k q (1-q)^3 / h; divided by r this is -20 k (1-q)^3 / h^2 (no 1/r singularity).
+    return rij * (Real(-20) * k * f * f * f * inv_h * inv_h);
+  }
+};
+
+// Either kernel behind one value type, so the solver is not templated on it.
+struct Kernel {
+  int kind = 0;  // 0 cubic spline, 1 Wendland C2
+  CubicSpline cubic;
+  WendlandC2 wendland;
+  Kernel() = default;
+  Kernel(int kind_, Real h) : kind(kind_), cubic(h), wendland(h) {}
+  SPHFEM_HD Real W(Real r) const { return kind == 0 ? cubic.W(r) : wendland.W(r); }
+  SPHFEM_HD Vec3 grad(const Vec3& rij, Real r) const {
+    return kind == 0 ? cubic.grad(rij, r) : wendland.grad(rij, r);
+  }
+};
+
+}  // namespace sphfem

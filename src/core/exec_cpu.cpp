@@ -1,0 +1,57 @@
+#include "exec_cpu.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "sphfem/core/backend.h"
+
+namespace sphfem {
+
+std::uint32_t exclusive_scan(CpuExec&, const std::uint32_t* in, std::uint32_t* out, int n) {
+  std::uint32_t sum = 0;
+  for (int i = 0; i < n; ++i) {
+    const std::uint32_t v = in[i];
+    out[i] = sum;
+    sum += v;
+  }
+  return sum;
+}
+
+void sort_pairs(CpuExec& ex, std::uint32_t* keys, std::uint32_t* vals, int n, int key_bits) {
+  if (n <= 1) return;
+  ex.scratch_keys.resize(n);
+  ex.scratch_vals.resize(n);
+  std::uint32_t* k0 = keys;
+  std::uint32_t* v0 = vals;
+  std::uint32_t* k1 = ex.scratch_keys.data();
+  std::uint32_t* v1 = ex.scratch_vals.data();
+  int passes = 0;
+  for (int shift = 0; shift < key_bits; shift += 8, ++passes) {
+    std::uint32_t count[257] = {0};
+    for (int i = 0; i < n; ++i) ++count[((k0[i] >> shift) & 0xffu) + 1];
+    for (int b = 0; b < 256; ++b) count[b + 1] += count[b];
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t d = count[(k0[i] >> shift) & 0xffu]++;
+      k1[d] = k0[i];
+      v1[d] = v0[i];
+    }
+    std::swap(k0, k1);
+    std::swap(v0, v1);
+  }
+  if (passes % 2 == 1) {
+    std::memcpy(keys, k0, sizeof(std::uint32_t) * n);
+    std::memcpy(vals, v0, sizeof(std::uint32_t) * n);
+  }
+}
+
+namespace {
+int g_threads = 0;
+}
+
+void set_cpu_threads(int n) {
+  g_threads = n;
+  omp_set_num_threads(n > 0 ? n : omp_get_num_procs());
+}
+int cpu_threads() { return g_threads > 0 ? g_threads : omp_get_max_threads(); }
+
+}  // namespace sphfem

@@ -1,0 +1,99 @@
+#include "sphfem/io/gauges.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <stdexcept>
+#include <utility>
+
+namespace sphfem::io {
+namespace {
+
+// RFC 4180 quoting, needed only when a column name holds a separator or a quote.
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+std::string format_gauge_value(double v) {
+  char buf[64];
+  if (std::isfinite(v) && std::fabs(v) < 1e15 && v == std::trunc(v))
+    std::snprintf(buf, sizeof(buf), "%.0f", v);
+  else
+    std::snprintf(buf, sizeof(buf), "%.9g", v);
+  return buf;
+}
+
+GaugeWriter::GaugeWriter(const std::string& path, std::vector<std::string> columns)
+    : path_(path), columns_(std::move(columns)) {
+  if (columns_.empty()) throw std::invalid_argument("gauge file '" + path_ + "' has no columns");
+  file_ = std::fopen(path_.c_str(), "w");
+  if (!file_) {
+    const int err = errno;
+    std::string msg = "cannot open gauge file '" + path_ + "': " + std::strerror(err);
+    const std::filesystem::path parent = std::filesystem::path(path_).parent_path();
+    std::error_code ec;
+    if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
+      msg += " (folder '" + parent.string() + "' does not exist)";
+    throw std::runtime_error(msg);
+  }
+  std::string header;
+  for (std::size_t i = 0; i < columns_.size(); ++i)
+    header += (i ? "," : "") + csv_field(columns_[i]);
+  try {
+    put(header + "\n");
+  } catch (...) {
+    std::fclose(file_);  // the destructor does not run for a throwing constructor
+    throw;
+  }
+}
+
+GaugeWriter::~GaugeWriter() {
+  if (file_) std::fclose(file_);
+}
+
+GaugeWriter::GaugeWriter(GaugeWriter&& o) noexcept
+    : path_(std::move(o.path_)), columns_(std::move(o.columns_)), file_(o.file_) {
+  o.file_ = nullptr;
+}
+
+GaugeWriter& GaugeWriter::operator=(GaugeWriter&& o) noexcept {
+  if (this != &o) {
+    if (file_) std::fclose(file_);
+    path_ = std::move(o.path_);
+    columns_ = std::move(o.columns_);
+    file_ = o.file_;
+    o.file_ = nullptr;
+  }
+  return *this;
+}
+
+void GaugeWriter::row(const std::vector<double>& values) {
+  if (values.size() != columns_.size())
+    throw std::invalid_argument("gauge row for '" + path_ + "' has " +
+                                std::to_string(values.size()) + " values, expected " +
+                                std::to_string(columns_.size()));
+  std::string line;
+  for (std::size_t i = 0; i < values.size(); ++i)
+    line += (i ? "," : "") + format_gauge_value(values[i]);
+  put(line + "\n");
+}
+
+void GaugeWriter::put(const std::string& line) {
+  if (!file_) throw std::logic_error("gauge file '" + path_ + "' is closed");
+  errno = 0;
+  // Flushing every line costs little at gauge rates and keeps rows written before a crash.
+  if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0)
+    throw std::runtime_error("cannot write gauge file '" + path_ +
+                             "': " + std::strerror(errno ? errno : EIO));
+}
+
+}  // namespace sphfem::io

@@ -1,0 +1,412 @@
+// The scene-file field table: each field of docs/scene-format.md is declared exactly once here.
+#include "sphfem/scene/fields.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <utility>
+
+namespace sphfem::scene {
+
+bool Range::contains(double v) const {
+  if (lo && (lo->inclusive ? v < lo->value : v <= lo->value)) return false;
+  if (hi && (hi->inclusive ? v > hi->value : v >= hi->value)) return false;
+  return true;
+}
+
+std::string Range::text() const {
+  std::string s;
+  if (lo) s = std::string(lo->inclusive ? ">= " : "> ") + format_number(lo->value);
+  if (lo && hi) s += " and ";
+  if (hi) s += std::string(hi->inclusive ? "<= " : "< ") + format_number(hi->value);
+  return s;
+}
+
+Range Range::with_lo(double v, bool inclusive) const {
+  Range r = *this;
+  r.lo = Bound{v, inclusive};
+  return r;
+}
+
+Range Range::with_hi(double v, bool inclusive) const {
+  Range r = *this;
+  r.hi = Bound{v, inclusive};
+  return r;
+}
+
+const Field* ObjectTable::find(const std::string& key) const {
+  for (const Field& f : fields)
+    if (f.key == key) return &f;
+  return nullptr;
+}
+
+std::vector<std::string> ObjectTable::keys() const {
+  std::vector<std::string> out;
+  for (const Field& f : fields) out.push_back(f.key);
+  return out;
+}
+
+std::string format_number(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buf[32];
+  int precision = 1;
+  for (; precision <= 17; ++precision) {
+    std::snprintf(buf, sizeof buf, "%.*g", precision, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
+  // Whole numbers of moderate size read better in full: 30, not 3e+01.
+  const int exponent = v == 0 ? 0 : static_cast<int>(std::floor(std::log10(std::abs(v))));
+  if (exponent >= precision && exponent < 15)
+    std::snprintf(buf, sizeof buf, "%.*g", exponent + 1, v);
+  return buf;
+}
+
+std::string format_value(const nlohmann::json& v) {
+  if (v.is_number()) return format_number(v.get<double>());
+  if (v.is_array()) {
+    std::string s = "[";
+    for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + format_value(v[i]);
+    return s + "]";
+  }
+  if (v.is_object()) {
+    std::string s = "{";
+    bool first = true;
+    for (const auto& [key, value] : v.items()) {
+      s += (first ? "" : ", ") + nlohmann::json(key).dump() + ": " + format_value(value);
+      first = false;
+    }
+    return s + "}";
+  }
+  return v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+namespace {
+
+using nlohmann::json;
+
+json vec_to_json(const Vec3d& v) { return json::array({v.x, v.y, v.z}); }
+Vec3d vec_from_json(const json& j) {
+  return Vec3d(j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>());
+}
+
+// Declares the fields of struct T in order, one call per field, and fills their defaults from a
+// default-constructed T so that no default is written twice.
+template <class T>
+class Table {
+ public:
+  Table(const char* name, const char* description) {
+    table_.name = name;
+    table_.description = description;
+  }
+
+  Table& number(const char* key, double T::*m, const char* unit, Range range, const char* text) {
+    Field& f = add(key, FieldType::Number, text);
+    f.unit = unit;
+    f.range = range;
+    f.get = [m](const void* o) { return json(of(o).*m); };
+    f.set = [m](void* o, const json& v) { of(o).*m = v.get<double>(); };
+    return *this;
+  }
+
+  Table& integer(const char* key, int T::*m, const char* unit, Range range, const char* text) {
+    Field& f = add(key, FieldType::Integer, text);
+    f.unit = unit;
+    f.range = range;
+    f.get = [m](const void* o) { return json(of(o).*m); };
+    f.set = [m](void* o, const json& v) { of(o).*m = static_cast<int>(v.get<double>()); };
+    return *this;
+  }
+
+  Table& boolean(const char* key, bool T::*m, const char* text) {
+    Field& f = add(key, FieldType::Bool, text);
+    f.get = [m](const void* o) { return json(of(o).*m); };
+    f.set = [m](void* o, const json& v) { of(o).*m = v.get<bool>(); };
+    return *this;
+  }
+
+  Table& string(const char* key, std::string T::*m, const char* text) {
+    Field& f = add(key, FieldType::String, text);
+    f.get = [m](const void* o) { return json(of(o).*m); };
+    f.set = [m](void* o, const json& v) { of(o).*m = v.get<std::string>(); };
+    return *this;
+  }
+
+  // Enumerators must be 0, 1, 2, ... in the order of names.
+  template <class E>
+  Table& choice(const char* key, E T::*m, std::vector<std::string> names, const char* text) {
+    Field& f = add(key, FieldType::Enum, text);
+    f.choices = names;
+    f.get = [m, names](const void* o) {
+      return json(names.at(static_cast<std::size_t>(of(o).*m)));
+    };
+    f.set = [m, names](void* o, const json& v) {
+      auto it = std::find(names.begin(), names.end(), v.get<std::string>());
+      of(o).*m = static_cast<E>(it - names.begin());
+    };
+    return *this;
+  }
+
+  Table& vec3(const char* key, Vec3d T::*m, const char* unit, const char* text) {
+    Field& f = add(key, FieldType::Vec3, text);
+    f.unit = unit;
+    f.get = [m](const void* o) { return vec_to_json(of(o).*m); };
+    f.set = [m](void* o, const json& v) { of(o).*m = vec_from_json(v); };
+    return *this;
+  }
+
+  template <class C>
+  Table& object(const char* key, C T::*m, const ObjectTable& nested, const char* text) {
+    Field& f = add(key, FieldType::Object, text);
+    f.table = &nested;
+    f.child = [m](void* o) -> void* { return &(of(o).*m); };
+    return *this;
+  }
+
+  template <class C>
+  Table& array(const char* key, std::vector<C> T::*m, const ObjectTable& nested, const char* text) {
+    Field& f = add(key, FieldType::ObjectArray, text);
+    f.table = &nested;
+    f.default_value = json::array();
+    f.count = [m](const void* o) { return (of(o).*m).size(); };
+    f.resize = [m](void* o, std::size_t n) { (of(o).*m).resize(n); };
+    f.element = [m](void* o, std::size_t i) -> void* { return &(of(o).*m).at(i); };
+    return *this;
+  }
+
+  // Rule of the last field beyond type and range, checked by its setter or by validate_scene.
+  Table& constraint(const char* text) {
+    table_.fields.back().constraint = text;
+    return *this;
+  }
+
+  // Replaces the last field's plain copy; the setter may throw FieldError.
+  Table& setter(std::function<void(T&, const json&)> fn) {
+    table_.fields.back().set = [fn](void* o, const json& v) { fn(of(o), v); };
+    return *this;
+  }
+
+  Table& finish(std::function<void(T&, std::size_t)> fn) {
+    table_.finish = [fn](void* o, std::size_t index) { fn(of(o), index); };
+    return *this;
+  }
+
+  ObjectTable build() {
+    const T defaults{};
+    for (Field& f : table_.fields)
+      if (f.get) f.default_value = f.get(&defaults);
+    return std::move(table_);
+  }
+
+ private:
+  static T& of(void* o) { return *static_cast<T*>(o); }
+  static const T& of(const void* o) { return *static_cast<const T*>(o); }
+
+  Field& add(const char* key, FieldType type, const char* text) {
+    Field f;
+    f.key = key;
+    f.type = type;
+    f.description = text;
+    table_.fields.push_back(std::move(f));
+    return table_.fields.back();
+  }
+
+  ObjectTable table_;
+};
+
+const Range kPositive = Range().gt(0);
+const Range kNonNegative = Range().ge(0);
+const Range kUnit = Range().ge(0).le(1);
+
+const ObjectTable& simulation_table() {
+  static const ObjectTable t =
+      Table<SimulationSpec>("simulation", "Time span, time stepping and the pressure solver.")
+          .number("duration", &SimulationSpec::duration, "s", kPositive, "Simulated time to run.")
+          .choice("solver", &SimulationSpec::solver, {"wcsph", "dfsph"},
+                  "Pressure solver: weakly compressible SPH (`wcsph`) or divergence-free SPH "
+                  "(`dfsph`).")
+          .number("dt_max", &SimulationSpec::dt_max, "s", kPositive,
+                  "Upper bound of the adaptive time step.")
+          .number("dt_min", &SimulationSpec::dt_min, "s", kPositive,
+                  "Lower bound of the adaptive time step; a run that needs a smaller step stops "
+                  "as unstable.")
+          .number("cfl", &SimulationSpec::cfl, "-", Range().gt(0).le(1),
+                  "Courant number: fraction of a particle spacing a particle may travel per step.")
+          .vec3("gravity", &SimulationSpec::gravity, "m/s^2",
+                "Gravitational acceleration; y points up.")
+          .number("density_tolerance", &SimulationSpec::density_tolerance, "-", Range().gt(0).lt(1),
+                  "DFSPH: target mean relative density error of the pressure solve.")
+          .number("divergence_tolerance", &SimulationSpec::divergence_tolerance, "-",
+                  Range().gt(0).lt(1),
+                  "DFSPH: target mean relative density change per step caused by the velocity "
+                  "divergence.")
+          .integer("max_iterations", &SimulationSpec::max_iterations, "-", Range().ge(1),
+                   "DFSPH: cap on pressure iterations per solve.")
+          .build();
+  return t;
+}
+
+const ObjectTable& block_table() {
+  static const ObjectTable t =
+      Table<FluidBlockSpec>("fluid.blocks[]",
+                            "Boxes filled with fluid particles on a cubic lattice at the start.")
+          .vec3("min", &FluidBlockSpec::lo, "m", "Lower corner of the box.")
+          .constraint("inside the domain, below `max` on every axis")
+          .vec3("max", &FluidBlockSpec::hi, "m", "Upper corner of the box.")
+          .constraint("inside the domain, at least one particle spacing above `min`")
+          .vec3("velocity", &FluidBlockSpec::velocity, "m/s", "Initial velocity of the fluid.")
+          .build();
+  return t;
+}
+
+const ObjectTable& emitter_table() {
+  static const ObjectTable t =
+      Table<EmitterSpec>("fluid.emitters[]",
+                         "Circular nozzles that add particles while the simulation runs.")
+          .vec3("position", &EmitterSpec::position, "m", "Centre of the nozzle.")
+          .constraint("nozzle disc inside the domain")
+          .vec3("direction", &EmitterSpec::direction, "-",
+                "Direction of the outflow; scaled to unit length on load.")
+          .constraint("non-zero")
+          .setter([](EmitterSpec& e, const json& v) {
+            Vec3d d = vec_from_json(v);
+            // Scale by the largest component first so huge inputs cannot overflow the norm.
+            double big = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+            if (!(big > 0))
+              throw FieldError("must not be the zero vector",
+                               "give the direction of the outflow, e.g. [0, -1, 0]");
+            d = d / big;
+            e.direction = d / norm(d);
+          })
+          .number("radius", &EmitterSpec::radius, "m", kPositive,
+                  "Radius of the nozzle disc, perpendicular to `direction`.")
+          .constraint("at least one particle spacing")
+          .number("speed", &EmitterSpec::speed, "m/s", kPositive,
+                  "Speed of the emitted fluid along `direction`.")
+          .number("start", &EmitterSpec::start, "s", kNonNegative,
+                  "Simulated time at which emission begins.")
+          .number("end", &EmitterSpec::end, "s", kNonNegative,
+                  "Simulated time at which emission stops.")
+          .constraint("greater than `start`")
+          .build();
+  return t;
+}
+
+const ObjectTable& fluid_table() {
+  static const ObjectTable t =
+      Table<FluidSpec>("fluid", "The fluid's material, its resolution and where it comes from.")
+          .number("particle_radius", &FluidSpec::particle_radius, "m", kPositive,
+                  "Particle radius; the particle spacing is twice this.")
+          .number("rest_density", &FluidSpec::rest_density, "kg/m^3", kPositive,
+                  "Density of the fluid at rest.")
+          .number("viscosity", &FluidSpec::viscosity, "m^2/s", kNonNegative,
+                  "Physical kinematic viscosity.")
+          .number("xsph", &FluidSpec::xsph, "-", kUnit,
+                  "XSPH velocity smoothing factor; 0 turns it off.")
+          .number("artificial_viscosity", &FluidSpec::artificial_viscosity, "-", kNonNegative,
+                  "Monaghan artificial viscosity alpha; 0 turns it off.")
+          .number("stiffness", &FluidSpec::stiffness, "Pa", kNonNegative,
+                  "WCSPH stiffness k in p = k (rho/rho0 - 1); 0 derives it from `max_speed`.")
+          .number("max_speed", &FluidSpec::max_speed, "m/s", kNonNegative,
+                  "Expected top speed used to derive the stiffness; 0 estimates it from the "
+                  "fluid heights.")
+          .choice("kernel", &FluidSpec::kernel, {"cubic_spline", "wendland_c2"},
+                  "Smoothing kernel.")
+          .integer("max_particles", &FluidSpec::max_particles, "-", kNonNegative,
+                   "Particle capacity reserved for emitters; 0 estimates it from the emitters.")
+          .array("blocks", &FluidSpec::blocks, block_table(),
+                 "Initial fluid boxes; see `fluid.blocks[]`.")
+          .array("emitters", &FluidSpec::emitters, emitter_table(),
+                 "Inflow nozzles; see `fluid.emitters[]`.")
+          .build();
+  return t;
+}
+
+const ObjectTable& domain_table() {
+  static const ObjectTable t =
+      Table<DomainSpec>("domain", "The tank: an axis-aligned box whose walls hold the fluid.")
+          .vec3("min", &DomainSpec::lo, "m", "Inner lower corner of the tank.")
+          .vec3("max", &DomainSpec::hi, "m", "Inner upper corner of the tank.")
+          .constraint("above `min` on every axis")
+          .boolean("open_top", &DomainSpec::open_top,
+                   "Tank without a lid; particles above `max` y are still kept inside the "
+                   "domain.")
+          .build();
+  return t;
+}
+
+const ObjectTable& output_table() {
+  static const ObjectTable t =
+      Table<OutputSpec>("output", "What the run writes; gauges are always written.")
+          .number("fps", &OutputSpec::fps, "1/s", kPositive,
+                  "Frames written per second of simulated time.")
+          .boolean("vtu", &OutputSpec::vtu, "Write VTK XML unstructured-grid frames (ParaView).")
+          .boolean("ply", &OutputSpec::ply, "Write binary PLY point frames (Houdini, MeshLab).")
+          .build();
+  return t;
+}
+
+const ObjectTable& gauge_table() {
+  static const ObjectTable t =
+      Table<GaugeSpec>("gauges[]", "Probes sampled at every output frame.")
+          .string("name", &GaugeSpec::name,
+                  "Column name in the gauge output; empty names become `gauge<i>`, i being the "
+                  "position in the list.")
+          .constraint("unique")
+          .choice("type", &GaugeSpec::kind, {"pressure", "height"},
+                  "`pressure` samples the pressure at `position`; `height` measures the fluid "
+                  "surface height above `position` x and z.")
+          .vec3("position", &GaugeSpec::position, "m",
+                "Where the gauge samples; a height gauge uses only x and z.")
+          .constraint("inside the domain")
+          .finish([](GaugeSpec& g, std::size_t index) {
+            if (g.name.empty()) g.name = "gauge" + std::to_string(index);
+          })
+          .build();
+  return t;
+}
+
+}  // namespace
+
+const ObjectTable& scene_table() {
+  static const ObjectTable t =
+      Table<SceneSpec>("", "A scene file is one JSON object with these sections.")
+          .string("name", &SceneSpec::name, "Title of the scene, shown in logs and outputs.")
+          .object("simulation", &SceneSpec::simulation, simulation_table(),
+                  "Time span and solver; see `simulation`.")
+          .object("fluid", &SceneSpec::fluid, fluid_table(),
+                  "Fluid material and sources; see `fluid`.")
+          .object("domain", &SceneSpec::domain, domain_table(), "The tank; see `domain`.")
+          .object("output", &SceneSpec::output, output_table(), "Frame output; see `output`.")
+          .array("gauges", &SceneSpec::gauges, gauge_table(), "Probes; see `gauges[]`.")
+          .build();
+  return t;
+}
+
+SceneSpec example_scene() {
+  SceneSpec s;
+  s.name = "dam break with inflow";
+  s.simulation.duration = 2.0;
+  s.simulation.solver = SolverKind::DFSPH;
+  s.fluid.particle_radius = 0.005;
+  s.fluid.viscosity = 1e-6;
+  s.fluid.xsph = 0.1;
+  s.fluid.blocks.push_back({Vec3d(0, 0, 0), Vec3d(0.2, 0.3, 0.1), Vec3d(0, 0, 0)});
+  EmitterSpec e;
+  e.position = Vec3d(0.6, 0.35, 0.05);
+  e.direction = Vec3d(0, -1, 0);
+  e.radius = 0.02;
+  e.speed = 1.0;
+  e.start = 0.5;
+  e.end = 1.5;
+  s.fluid.emitters.push_back(e);
+  s.domain.lo = Vec3d(0, 0, 0);
+  s.domain.hi = Vec3d(0.8, 0.4, 0.1);
+  s.output.fps = 30;
+  s.gauges.push_back({"p_bottom", GaugeKind::Pressure, Vec3d(0.1, 0.005, 0.05)});
+  s.gauges.push_back({"h_wall", GaugeKind::Height, Vec3d(0.79, 0, 0.05)});
+  return s;
+}
+
+}  // namespace sphfem::scene
