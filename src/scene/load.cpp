@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "sphfem/scene/fields.h"
+#include "sphfem/sph/model.h"
 
 namespace sphfem {
 namespace {
@@ -569,7 +570,10 @@ void validate_scene(const SceneSpec& s, const std::string& path) {
     }
   }
 
-  // Solver-specific checks (time step vs CFL) are added by sph::check_scene.
+  // Solver-specific checks (time step vs CFL) come from the solver that knows its limits.
+  const std::string solver_problem = check_solver_settings(s);
+  if (!solver_problem.empty())
+    throw SceneError(one_line(display_file(path) + ": " + solver_problem));
 }
 
 SceneSpec load_scene(const std::string& path) {

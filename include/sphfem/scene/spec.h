@@ -32,7 +32,7 @@ struct FluidBlockSpec {
 struct EmitterSpec {
   Vec3d position;      // m, nozzle centre
   Vec3d direction{0.0, -1.0, 0.0};  // unit after loading
-  double radius = 0.02;  // m, nozzle radius
+  double radius = 0.05;  // m, nozzle radius
   double speed = 1.0;    // m/s, outflow speed
   double start = 0.0;    // s
   double end = 1e30;     // s

@@ -1,0 +1,30 @@
+# The two commands of the README: `make demo` and `make test`. Both install what is missing
+# (scripts/install-deps.sh), configure and build Release in build/release.
+BUILD ?= build/release
+JOBS ?= $(shell nproc)
+CMAKE_ARGS ?=
+DEMO_SCENE ?= scenes/default.json
+DEMO_OUT ?= out/default
+
+.PHONY: deps configure build demo test bench clean
+
+deps:
+	@bash scripts/install-deps.sh
+
+configure: deps
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DSPHFEM_MARCH=native $(CMAKE_ARGS) >/dev/null
+
+build: configure
+	@cmake --build $(BUILD) -j$(JOBS)
+
+demo: build
+	$(BUILD)/bin/sphfem run $(DEMO_SCENE) --out $(DEMO_OUT)
+
+test: build
+	ctest --test-dir $(BUILD) --output-on-failure -j$(JOBS)
+
+bench: build
+	$(BUILD)/bin/sphfem bench --out bench/results
+
+clean:
+	rm -rf $(BUILD)

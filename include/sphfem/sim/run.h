@@ -1,0 +1,33 @@
+// Running a scene: the solver, frame files, gauges.csv and progress, as `sphfem run` does.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "sphfem/core/backend.h"
+#include "sphfem/scene/spec.h"
+
+namespace sphfem {
+
+struct RunOptions {
+  std::string out_dir;       // created if missing; frames/ and gauges.csv go inside
+  Backend backend = Backend::Cpu;
+  int threads = 0;           // CPU threads, 0 = all cores
+  double duration = -1;      // s, overrides simulation.duration when >= 0
+  bool progress = true;      // progress line on stderr
+};
+
+struct RunSummary {
+  std::string out_dir;
+  long steps = 0;
+  int frames = 0;
+  int particles = 0;
+  double sim_seconds = 0;
+  double wall_seconds = 0;
+};
+
+// Throws SceneError/std::runtime_error before writing anything when the scene cannot run,
+// and SimulationError when the run blows up (every frame already written is kept).
+RunSummary run_scene(const SceneSpec& scene, const RunOptions& options);
+
+}  // namespace sphfem
