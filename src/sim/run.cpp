@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "sphfem/io/atomic_file.h"
 #include "sphfem/io/gauges.h"
 #include "sphfem/io/ply.h"
@@ -110,6 +112,19 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
   io::GaugeWriter gauges(opt.out_dir + "/gauges.csv", gauge_columns(scene));
   std::unique_ptr<io::PvdCollection> pvd;
   if (scene.output.vtu) pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/fluid.pvd");
+
+  // What a reader of the folder needs besides the frames (the renderer: radius and tank).
+  nlohmann::json info = {
+      {"scene", scene.path},
+      {"name", scene.name},
+      {"particle_radius", scene.fluid.particle_radius},
+      {"domain",
+       {{"min", {scene.domain.lo.x, scene.domain.lo.y, scene.domain.lo.z}},
+        {"max", {scene.domain.hi.x, scene.domain.hi.y, scene.domain.hi.z}}}},
+      {"solver", scene.simulation.solver == SolverKind::DFSPH ? "dfsph" : "wcsph"},
+      {"backend", opt.backend == Backend::Cuda ? "cuda" : "cpu"},
+      {"fps", scene.output.fps}};
+  io::write_file_atomic(opt.out_dir + "/run.json", info.dump(2) + "\n");
 
   const double frame_dt = 1.0 / scene.output.fps;
   const auto t0 = Clock::now();
