@@ -19,6 +19,7 @@ build: configure
 
 demo: build
 	$(BUILD)/bin/sphfem run $(DEMO_SCENE) --out $(DEMO_OUT)
+	$(BUILD)/bin/sphfem render $(DEMO_OUT) --frames last
 
 test: build
 	ctest --test-dir $(BUILD) --output-on-failure -j$(JOBS)

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "bench.h"
+#include "render_cmd.h"
 #include "sphfem/scene/load.h"
 #include "sphfem/sim/run.h"
 #include "sphfem/sph/solver.h"
@@ -103,11 +104,27 @@ int main(int argc, char** argv) {
   bench->add_option("--out", bench_opt.out_dir, "folder for the result file (none = print only)");
   bench->add_option("--particles-per-side", bench_opt.side, "block of N^3 particles (default 40)");
 
+  RenderOptions render_opt;
+  std::string size = "1280x720";
+  auto* render = app.add_subcommand("render", "draw a run's frames as PNG images in OUT/images");
+  render->add_option("out", render_opt.out_dir, "folder written by `sphfem run`")->required();
+  render->add_option("--size", size, "image size WIDTHxHEIGHT (default 1280x720)");
+  render->add_option("--frames", render_opt.frames, "all, last or a frame number (default all)");
+
   CLI11_PARSE(app, argc, argv);
+  if (*render) {
+    if (std::sscanf(size.c_str(), "%dx%d", &render_opt.width, &render_opt.height) != 2 ||
+        render_opt.width < 16 || render_opt.height < 16 || render_opt.width > 16384 ||
+        render_opt.height > 16384) {
+      std::fprintf(stderr, "error: --size %s: expected WIDTHxHEIGHT, e.g. 1280x720\n", size.c_str());
+      return 2;
+    }
+  }
   try {
     if (*check) return cmd_check(scene);
     if (*run) return cmd_run(scene, out, backend, threads, duration, quiet);
     if (*bench) return run_bench(bench_opt);
+    if (*render) return run_render(render_opt);
   } catch (const SceneError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
