@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "sphfem/core/vec.h"
 #include "sphfem/io/vtu.h"
 
 namespace fs = std::filesystem;
@@ -41,7 +42,8 @@ class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("sphfem_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("sphfem_cli_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -76,13 +78,15 @@ TEST_F(Cli, RunWritesFramesGaugesAndNamesTheFolderLast) {
     EXPECT_TRUE(fs::exists(out / "frames" / (std::string(name) + ".vtu"))) << name;
     EXPECT_TRUE(fs::exists(out / "frames" / (std::string(name) + ".ply"))) << name;
   }
-  const sphfem::io::PointSet ps = sphfem::io::read_vtu_points((out / "frames" / "fluid_000005.vtu").string());
+  const sphfem::io::PointSet ps =
+      sphfem::io::read_vtu_points((out / "frames" / "fluid_000005.vtu").string());
   EXPECT_EQ(ps.size(), 125u);
   std::ifstream g(out / "gauges.csv");
   std::string header, line;
   std::getline(g, header);
-  for (const char* col : {"time", "step", "dt", "n_fluid", "fluid_front_x", "max_density_error",
-                          "kinetic_energy", "momentum_x", "momentum_y", "momentum_z", "ms_density", "p0"})
+  for (const char* col :
+       {"time", "step", "dt", "n_fluid", "fluid_front_x", "max_density_error", "kinetic_energy",
+        "momentum_x", "momentum_y", "momentum_z", "ms_density", "p0"})
     EXPECT_NE(header.find(col), std::string::npos) << col;
   int rows = 0;
   while (std::getline(g, line)) ++rows;
@@ -158,6 +162,79 @@ TEST_F(Cli, CudaWithoutGpuIsAClearError) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("--backend cpu"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(dir_ / "o"));
+}
+
+std::string source_file(const std::string& relative) {
+  return std::string(SPHFEM_SOURCE_DIR) + "/" + relative;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST_F(Cli, CheckPrintsBodies) {
+  const Result r = cli("check " + source_file("scenes/cantilever.json"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("beam (box): 1025 nodes, 3840 tets, 1344 surface triangles, 10 kg"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("fluid       none"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("MiB"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, RunOfABodySceneWritesBodyFrames) {
+  const fs::path out = dir_ / "out";
+  const Result r = cli("run " + source_file("scenes/cloth_hanging.json") +
+                       " --duration 0.1 --quiet --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("882 body nodes (1 bodies)"), std::string::npos) << r.out;
+  EXPECT_NE(last_line(r.out).find("bodies.pvd"), std::string::npos) << r.out;
+  for (int f = 0; f <= 3; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof name, "%06d.vtu", f);
+    EXPECT_TRUE(fs::exists(out / "frames" / (std::string("bodies_") + name))) << name;
+    EXPECT_TRUE(fs::exists(out / "frames" / (std::string("bodies_tets_") + name))) << name;
+  }
+  const std::string header = read_text(out / "gauges.csv").substr(0, 4096);
+  for (const char* col :
+       {"ms_fem", "free_corner_dy", "cloth_kinetic_energy", "cloth_elastic_energy"})
+    EXPECT_NE(header.find(col), std::string::npos) << col;
+  EXPECT_NE(read_text(out / "run.json").find("\"cloth\""), std::string::npos);
+}
+
+TEST_F(Cli, BadBodyExitsWithCodeTwoAndWritesNothing) {
+  std::string scene = read_text(source_file("scenes/cantilever.json"));
+  const std::string poisson = "\"poisson\": 0.3";
+  scene.replace(scene.find(poisson), poisson.size(), "\"poisson\": 0.5");
+  const fs::path out = dir_ / "out";
+  const Result r = cli("run " + write("beam.json", scene) + " --out " + out.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("beam.json: bodies[0].material.poisson: must be > -1 and < 0.5 (got 0.5)"),
+            std::string::npos)
+      << r.out;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(Cli, BodyBlowUpExitsWithCodeThreeAndKeepsFrames) {
+  if (sizeof(sphfem::Real) != sizeof(float)) GTEST_SKIP() << "needs single-precision bodies";
+  std::string scene = read_text(source_file("scenes/cantilever.json"));
+  const std::string young = "\"young\": 2e7";
+  scene.replace(scene.find(young), young.size(), "\"young\": 1e39");
+  const fs::path out = dir_ / "out";
+  const Result r = cli("run " + write("blow.json", scene) + " --out " + out.string());
+  ASSERT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("step 1 (t = "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("simulation.dt_max"), std::string::npos) << r.out;
+  EXPECT_NO_THROW(sphfem::io::read_vtu_points((out / "frames" / "bodies_000000.vtu").string()));
+}
+
+TEST_F(Cli, FemBenchWithAMissingMeshIsAClearError) {
+  const Result r = cli("bench --fem --steps 1 --mesh " + (dir_ / "nope.obj").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("nope.obj: cannot open the file"), std::string::npos) << r.out;
 }
 
 }  // namespace

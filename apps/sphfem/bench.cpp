@@ -10,10 +10,6 @@
 #include "sphfem/io/atomic_file.h"
 #include "sphfem/sph/solver.h"
 
-namespace {
-
-using namespace sphfem;
-
 std::string cpu_model() {
   std::ifstream f("/proc/cpuinfo");
   std::string line;
@@ -21,6 +17,10 @@ std::string cpu_model() {
     if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
   return "unknown CPU";
 }
+
+namespace {
+
+using namespace sphfem;
 
 SceneSpec bench_scene(SolverKind solver, int side) {
   SceneSpec s;

@@ -1,5 +1,6 @@
 // `sphfem bench`: the dam-break workload of the SPH benchmark (a 40^3 block of particles of
-// radius 0.0125 m in a 4 x 3 x 1.5 m tank, fixed 1 ms step), ms/step per phase.
+// radius 0.0125 m in a 4 x 3 x 1.5 m tank, fixed 1 ms step), ms/step per phase; and with
+// --fem the FEM bodies at the sizes of the paper's Table 1 (bench_fem.cpp).
 #pragma once
 
 #include <string>
@@ -11,6 +12,13 @@ struct BenchOptions {
   int threads = 0;
   std::string backend = "cpu";
   std::string out_dir;
+  bool fem = false;
+  std::string mesh;  // --fem: surface to tetrahedralise; empty = the fetched bunny
 };
 
+// Measured steps of the FEM benchmark when --steps is not given.
+constexpr int kFemBenchSteps = 50;
+
 int run_bench(const BenchOptions& opt);
+std::string cpu_model();  // the CPU's model name, for result files
+int run_fem_bench(const BenchOptions& opt);

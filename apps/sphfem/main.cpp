@@ -7,6 +7,8 @@
 
 #include "bench.h"
 #include "render_cmd.h"
+#include "sphfem/scene/bodies.h"
+#include "sphfem/scene/fields.h"
 #include "sphfem/scene/load.h"
 #include "sphfem/sim/run.h"
 #include "sphfem/sph/solver.h"
@@ -21,26 +23,57 @@ std::string default_out(const std::string& scene) {
   return "out/" + std::filesystem::path(scene).stem().string();
 }
 
+// The scene-file name of a body's shape, from the field table.
+std::string shape_name(BodyShape shape) {
+  const scene::ObjectTable& body = *scene::scene_table().find("bodies")->table;
+  return body.find("shape")->choices.at(std::size_t(shape));
+}
+
 int cmd_check(const std::string& path) {
   const SceneSpec s = load_scene(path);
-  const FluidModel m = compile_fluid(s);
-  const double cells = double(m.grid.cells());
-  // Per particle: x, v, a, tmp (4 x 12 B), rho, p, alpha, kappa, tmp (5 x 4 B), nb, id, keys,
-  // perm, tmp (5 x 4 B); per wall sample 16 B; per cell 8 B (fluid and wall starts).
-  const double bytes = m.capacity * (4 * 12.0 + 10 * 4.0) + m.boundary_x.size() * 16.0 + cells * 8.0;
   std::printf("scene       %s%s%s\n", path.c_str(), s.name.empty() ? "" : " — ", s.name.c_str());
-  std::printf("solver      %s, %s kernel, support %.4g m\n",
-              s.simulation.solver == SolverKind::DFSPH ? "DFSPH" : "WCSPH",
-              s.fluid.kernel == KernelKind::CubicSpline ? "cubic spline" : "Wendland C2",
-              double(m.params.h));
-  std::printf("particles   %zu at start, up to %d with emitters (%zu emitters)\n", m.x0.size(),
-              m.capacity, m.emitters.size());
-  std::printf("walls       %zu samples\n", m.boundary_x.size());
-  std::printf("grid        %d x %d x %d cells\n", m.grid.nx, m.grid.ny, m.grid.nz);
-  if (s.simulation.solver == SolverKind::WCSPH)
-    std::printf("stiffness   %.4g Pa (sound speed %.3g m/s), step <= %.3g s\n",
-                double(m.params.stiffness), double(m.params.sound_speed),
-                std::min(s.simulation.dt_max, wcsph_dt_limit(s, 0.0)));
+  double bytes = 0;
+  if (s.has_fluid()) {
+    const FluidModel m = compile_fluid(s);
+    const double cells = double(m.grid.cells());
+    // Per particle: x, v, a, tmp (4 x 12 B), rho, p, alpha, kappa, tmp (5 x 4 B), nb, id, keys,
+    // perm, tmp (5 x 4 B); per wall sample 16 B; per cell 8 B (fluid and wall starts).
+    bytes += m.capacity * (4 * 12.0 + 10 * 4.0) + m.boundary_x.size() * 16.0 + cells * 8.0;
+    std::printf("solver      %s, %s kernel, support %.4g m\n",
+                s.simulation.solver == SolverKind::DFSPH ? "DFSPH" : "WCSPH",
+                s.fluid.kernel == KernelKind::CubicSpline ? "cubic spline" : "Wendland C2",
+                double(m.params.h));
+    std::printf("particles   %zu at start, up to %d with emitters (%zu emitters)\n", m.x0.size(),
+                m.capacity, m.emitters.size());
+    std::printf("walls       %zu samples\n", m.boundary_x.size());
+    std::printf("grid        %d x %d x %d cells\n", m.grid.nx, m.grid.ny, m.grid.nz);
+    if (s.simulation.solver == SolverKind::WCSPH)
+      std::printf("stiffness   %.4g Pa (sound speed %.3g m/s), step <= %.3g s\n",
+                  double(m.params.stiffness), double(m.params.sound_speed),
+                  std::min(s.simulation.dt_max, wcsph_dt_limit(s, 0.0)));
+  } else {
+    std::printf("fluid       none: the bodies step with simulation.dt_max = %.4g s\n",
+                s.simulation.dt_max);
+  }
+  if (!s.bodies.empty()) {
+    const BodiesModel b = compile_scene_bodies(s);
+    for (std::size_t i = 0; i < b.bodies.size(); ++i) {
+      const BodyModel& body = b.bodies[i];
+      double mass = 0;
+      for (double m : body.mass) mass += m;
+      int pinned = 0;
+      for (std::uint8_t p : body.pinned) pinned += p;
+      std::printf(
+          "body        %s (%s): %zu nodes, %zu tets, %zu surface triangles, %.4g kg, %d "
+          "pinned nodes\n",
+          body.name.c_str(), shape_name(s.bodies[i].shape).c_str(), body.rest.size(),
+          body.tets.size(), body.surface.size(), mass, pinned);
+    }
+    // Per node: x, v and ten solver vectors (12 x 12 B), mass, damping, preconditioner,
+    // flags, gather start (37 B); per tet: nodes, gradients, moduli, rotated gradients, element
+    // forces, rotations, gather entries (196 B); per surface triangle 12 B.
+    bytes += b.nodes * 181.0 + b.elements * 196.0 + b.surface.size() * 12.0;
+  }
   std::printf("time        %.4g s, frames every %.4g s (%d frames)\n", s.simulation.duration,
               1.0 / s.output.fps, int(s.simulation.duration * s.output.fps) + 1);
   std::printf("memory      about %.1f MiB\n", bytes / (1024.0 * 1024.0));
@@ -59,11 +92,15 @@ int cmd_run(const std::string& path, const std::string& out, const std::string& 
   opt.progress = !quiet;
   try {
     const RunSummary r = run_scene(s, opt);
-    std::printf("%d particles, %ld steps, %.3f s simulated in %.1f s wall (%.1f steps/s)\n",
-                r.particles, r.steps, r.sim_seconds, r.wall_seconds,
-                r.wall_seconds > 0 ? r.steps / r.wall_seconds : 0.0);
-    std::printf("output: %s (%d frames in frames/, fluid.pvd, gauges.csv)\n", r.out_dir.c_str(),
-                r.frames);
+    std::printf(
+        "%d particles, %d body nodes (%d bodies), %ld steps, %.3f s simulated in %.1f s "
+        "wall (%.1f steps/s)\n",
+        r.particles, r.body_nodes, r.bodies, r.steps, r.sim_seconds, r.wall_seconds,
+        r.wall_seconds > 0 ? r.steps / r.wall_seconds : 0.0);
+    std::string files = s.has_fluid() ? "fluid.pvd, " : "";
+    if (r.bodies > 0) files += "bodies.pvd, bodies_tets.pvd, ";
+    std::printf("output: %s (%d frames in frames/, %sgauges.csv)\n", r.out_dir.c_str(), r.frames,
+                files.c_str());
   } catch (const SimulationError& e) {
     std::fprintf(stderr, "error: %s: %s\n", path.c_str(), e.what());
     std::fprintf(stderr, "frames written so far are kept in %s\n", opt.out_dir.c_str());
@@ -86,7 +123,8 @@ int main(int argc, char** argv) {
   run->add_option("scene", scene, "scene file (JSON)")->required();
   run->add_option("--out", out, "output folder (default out/<scene name>)");
   run->add_option("--backend", backend, "cpu or cuda")->check(CLI::IsMember({"cpu", "cuda"}));
-  run->add_option("--threads", threads, "CPU threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  run->add_option("--threads", threads, "CPU threads (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
   run->add_option("--duration", duration, "simulated seconds (overrides the scene)")
       ->check(CLI::NonNegativeNumber);
   run->add_flag("--quiet", quiet, "no progress line");
@@ -95,14 +133,22 @@ int main(int argc, char** argv) {
   check->add_option("scene", scene, "scene file (JSON)")->required();
 
   BenchOptions bench_opt;
-  auto* bench = app.add_subcommand("bench", "dam-break benchmark: ms/step per phase");
+  auto* bench = app.add_subcommand(
+      "bench", "dam-break benchmark: ms/step per phase; with --fem the FEM bodies of Table 1");
   bench->add_option("--steps", bench_opt.steps, "measured steps")->check(CLI::PositiveNumber);
   bench->add_option("--solver", bench_opt.solver, "wcsph, dfsph or both")
       ->check(CLI::IsMember({"wcsph", "dfsph", "both"}));
   bench->add_option("--threads", bench_opt.threads, "CPU threads (default: all cores)");
-  bench->add_option("--backend", bench_opt.backend, "cpu or cuda")->check(CLI::IsMember({"cpu", "cuda"}));
+  bench->add_option("--backend", bench_opt.backend, "cpu or cuda")
+      ->check(CLI::IsMember({"cpu", "cuda"}));
   bench->add_option("--out", bench_opt.out_dir, "folder for the result file (none = print only)");
   bench->add_option("--particles-per-side", bench_opt.side, "block of N^3 particles (default 40)");
+  bench->add_flag("--fem", bench_opt.fem,
+                  "FEM ms/step for spheres and the bunny at the tetrahedron counts of the paper's "
+                  "Table 1, instead of the fluid");
+  bench->add_option("--mesh", bench_opt.mesh,
+                    "--fem: closed surface to tetrahedralise (default build/assets/bunny.obj, "
+                    "written by scripts/fetch-bunny.sh build/assets)");
 
   RenderOptions render_opt;
   std::string size = "1280x720";
@@ -116,14 +162,18 @@ int main(int argc, char** argv) {
     if (std::sscanf(size.c_str(), "%dx%d", &render_opt.width, &render_opt.height) != 2 ||
         render_opt.width < 16 || render_opt.height < 16 || render_opt.width > 16384 ||
         render_opt.height > 16384) {
-      std::fprintf(stderr, "error: --size %s: expected WIDTHxHEIGHT, e.g. 1280x720\n", size.c_str());
+      std::fprintf(stderr, "error: --size %s: expected WIDTHxHEIGHT, e.g. 1280x720\n",
+                   size.c_str());
       return 2;
     }
   }
   try {
     if (*check) return cmd_check(scene);
     if (*run) return cmd_run(scene, out, backend, threads, duration, quiet);
-    if (*bench) return run_bench(bench_opt);
+    if (*bench) {
+      if (bench_opt.fem && bench->count("--steps") == 0) bench_opt.steps = kFemBenchSteps;
+      return bench_opt.fem ? run_fem_bench(bench_opt) : run_bench(bench_opt);
+    }
     if (*render) return run_render(render_opt);
   } catch (const SceneError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

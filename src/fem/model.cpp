@@ -16,8 +16,9 @@ void check_material(const Material& m, const std::string& name) {
   };
   if (!(m.density > 0.0)) bad("density", m.density, "use a positive density in kg/m^3");
   if (!(m.young > 0.0)) bad("young", m.young, "use a positive Young's modulus in Pa");
-  if (!(m.poisson >= 0.0 && m.poisson < 0.5))
-    bad("poisson", m.poisson, "use a Poisson ratio in [0, 0.5)");
+  // Linear elasticity is positive definite for -1 < nu < 0.5 (auxetic materials included).
+  if (!(m.poisson > -1.0 && m.poisson < 0.5))
+    bad("poisson", m.poisson, "use a Poisson ratio in (-1, 0.5)");
   if (!(m.alpha >= 0.0)) bad("alpha", m.alpha, "Rayleigh damping must not be negative");
   if (!(m.beta >= 0.0)) bad("beta", m.beta, "Rayleigh damping must not be negative");
 }

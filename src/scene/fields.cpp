@@ -119,6 +119,20 @@ class Table {
     return *this;
   }
 
+  // A list of whole numbers, each within `range`.
+  Table& integers(const char* key, std::vector<int> T::*m, Range range, const char* text) {
+    Field& f = add(key, FieldType::IntegerList, text);
+    f.range = range;
+    f.default_value = json::array();
+    f.get = [m](const void* o) { return json(of(o).*m); };
+    f.set = [m](void* o, const json& v) {
+      std::vector<int> values;
+      for (const json& x : v) values.push_back(static_cast<int>(x.get<double>()));
+      of(o).*m = std::move(values);
+    };
+    return *this;
+  }
+
   Table& boolean(const char* key, bool T::*m, const char* text) {
     Field& f = add(key, FieldType::Bool, text);
     f.get = [m](const void* o) { return json(of(o).*m); };
@@ -176,7 +190,7 @@ class Table {
   }
 
   // Rule of the last field beyond type and range, checked by its setter or by validate_scene.
-  Table& constraint(const char* text) {
+  Table& constraint(const std::string& text) {
     table_.fields.back().constraint = text;
     return *this;
   }
@@ -325,7 +339,8 @@ const ObjectTable& fluid_table() {
 
 const ObjectTable& domain_table() {
   static const ObjectTable t =
-      Table<DomainSpec>("domain", "The tank: an axis-aligned box whose walls hold the fluid.")
+      Table<DomainSpec>("domain",
+                        "The tank: an axis-aligned box whose walls hold the fluid and the bodies.")
           .vec3("min", &DomainSpec::lo, "m", "Inner lower corner of the tank.")
           .vec3("max", &DomainSpec::hi, "m", "Inner upper corner of the tank.")
           .constraint("above `min` on every axis")
@@ -354,15 +369,161 @@ const ObjectTable& gauge_table() {
                   "Column name in the gauge output; empty names become `gauge<i>`, i being the "
                   "position in the list.")
           .constraint("unique")
-          .choice("type", &GaugeSpec::kind, {"pressure", "height"},
+          .choice("type", &GaugeSpec::kind, {"pressure", "height", "node"},
                   "`pressure` samples the pressure at `position`; `height` measures the fluid "
-                  "surface height above `position` x and z.")
+                  "surface height above `position` x and z; `node` follows the node of `body` "
+                  "nearest to `position` at rest and reports its displacement in the columns "
+                  "`<name>_dx`, `<name>_dy`, `<name>_dz`.")
           .vec3("position", &GaugeSpec::position, "m",
                 "Where the gauge samples; a height gauge uses only x and z.")
           .constraint("inside the domain")
+          .string("body", &GaugeSpec::body, "Node gauges: name of the body followed.")
+          .constraint("node gauges only, where it must name a body")
           .finish([](GaugeSpec& g, std::size_t index) {
             if (g.name.empty()) g.name = "gauge" + std::to_string(index);
           })
+          .build();
+  return t;
+}
+
+const ObjectTable& material_table() {
+  static const ObjectTable t =
+      Table<Material>("bodies[].material",
+                      "Linear isotropic elastic material of a body and its Rayleigh damping "
+                      "D = alpha M + beta K.")
+          .number("density", &Material::density, "kg/m^3", kPositive, "Mass density.")
+          .number("young", &Material::young, "Pa", kPositive, "Young's modulus E.")
+          .number("poisson", &Material::poisson, "-", Range().gt(-1).lt(0.5),
+                  "Poisson's ratio; rubber is near 0.45-0.49 (0.5, incompressible, locks linear "
+                  "tetrahedra).")
+          .number("damping_alpha", &Material::alpha, "1/s", kNonNegative,
+                  "Rayleigh mass damping alpha: damps slow motion, a damping ratio of "
+                  "alpha / (2 omega) at angular frequency omega.")
+          .number("damping_beta", &Material::beta, "s", kNonNegative,
+                  "Rayleigh stiffness damping beta: damps fast vibration, a damping ratio of "
+                  "beta omega / 2.")
+          .build();
+  return t;
+}
+
+const ObjectTable& pin_box_table() {
+  static const ObjectTable t =
+      Table<PinBoxSpec>("bodies[].pinned.boxes[]",
+                        "Boxes whose nodes (at their rest positions) are held fixed.")
+          .vec3("min", &PinBoxSpec::lo, "m", "Lower corner of the box.")
+          .constraint("at most `max` on every axis")
+          .vec3("max", &PinBoxSpec::hi, "m",
+                "Upper corner of the box; equal to `min` on an axis, the box is a plane that "
+                "picks the nodes of a flat face.")
+          .constraint("the box holds at least one node of the body")
+          .build();
+  return t;
+}
+
+const ObjectTable& pinned_table() {
+  static const ObjectTable t =
+      Table<PinSpec>("bodies[].pinned",
+                     "Nodes held fixed at their rest positions (Dirichlet boundary): those inside "
+                     "any of the boxes and those listed.")
+          .array("boxes", &PinSpec::boxes, pin_box_table(),
+                 "Regions of pinned nodes; see `bodies[].pinned.boxes[]`.")
+          .integers("nodes", &PinSpec::nodes, Range().ge(0),
+                    "Further pinned nodes by index, from 0, in the order of the body's points in "
+                    "`frames/bodies_tets_*.vtu` (counted from the body's first point).")
+          .constraint("below the body's node count")
+          .build();
+  return t;
+}
+
+const ObjectTable& body_table() {
+  static const ObjectTable t =
+      Table<BodySpec>("bodies[]",
+                      "Deformable bodies: co-rotated linear FEM on tetrahedra, each a generated "
+                      "shape or a mesh file. Until the fluid coupling arrives, bodies feel "
+                      "gravity and the tank's six walls (a lid even when `open_top`) only.")
+          .string("name", &BodySpec::name,
+                  "Name in logs, run.json and the gauge columns `<name>_kinetic_energy` and "
+                  "`<name>_elastic_energy`; empty names become `body<i>`, i being the position in "
+                  "the list.")
+          .constraint("unique; letters, digits, `_` and `-`")
+          .choice("shape", &BodySpec::shape, {"box", "tube", "cup", "sphere", "cloth", "mesh"},
+                  "Generated shape, or `mesh` to read `file`.")
+          .vec3("position", &BodySpec::position, "m",
+                "Centre of a box, sphere or cloth; centre of the bottom of a tube or cup, which "
+                "extend along +y. A mesh is placed by `offset` instead.")
+          .constraint("the whole body inside the domain")
+          .vec3("size", &BodySpec::size, "m",
+                "Box: edge lengths. Cloth: extents along x and z (its y extent is `thickness`).")
+          .constraint("box: > 0 on every axis; cloth: > 0 on x and z")
+          .number("radius", &BodySpec::radius, "m", kPositive,
+                  "Sphere: radius. Tube and cup: outer radius.")
+          .number("inner_radius", &BodySpec::inner_radius, "m", kPositive,
+                  "Tube and cup: inner radius.")
+          .constraint("below `radius`")
+          .number("length", &BodySpec::length, "m", kPositive, "Tube: length along +y.")
+          .number("height", &BodySpec::height, "m", kPositive,
+                  "Cup: height along +y, bottom included.")
+          .number("thickness", &BodySpec::thickness, "m", kPositive,
+                  "Cloth: thickness along y (one cell). Cup: thickness of the bottom.")
+          .constraint("cup: below `height`")
+          .integer("resolution", &BodySpec::resolution, "-", Range().ge(1),
+                   "Cells across the largest extent (sphere and cup: across the outer "
+                   "diameter); the other directions get cells of about the same size. A cell "
+                   "holds 6 tetrahedra.")
+          .constraint("at most " + std::to_string(kMaxBodyTets) + " tetrahedra")
+          .string("file", &BodySpec::file,
+                  "Mesh: a closed triangle surface (OBJ, PLY, STL), tetrahedralised with TetGen, "
+                  "or a tetrahedral mesh (TetGen `.node`/`.ele`, Gmsh `.msh`) used as it is; a "
+                  "relative path is taken from the scene file's folder.")
+          .constraint(
+              "mesh: required; a surface must be closed, manifold and not intersect "
+              "itself")
+          .number("scale", &BodySpec::scale, "-", kPositive,
+                  "Mesh: factor on the file's coordinates (0.001 for millimetres), applied before "
+                  "`offset`.")
+          .vec3("offset", &BodySpec::offset, "m", "Mesh: added to the scaled coordinates.")
+          .number("max_volume", &BodySpec::max_volume, "m^3", kNonNegative,
+                  "Surface meshes: largest tetrahedron volume (TetGen `a`); 0 sets no limit.")
+          .number("quality", &BodySpec::quality, "-", kNonNegative,
+                  "Surface meshes: largest radius-edge ratio of a tetrahedron (TetGen `q`); "
+                  "lower is better shaped but finer; 0 turns quality refinement off.")
+          .constraint("0 or at least " + format_number(kMinTetgenQuality))
+          .object("material", &BodySpec::material, material_table(),
+                  "Elastic material; see `bodies[].material`.")
+          .vec3("velocity", &BodySpec::velocity, "m/s", "Initial velocity of the free nodes.")
+          .object("pinned", &BodySpec::pinned, pinned_table(),
+                  "Nodes held in place; see `bodies[].pinned`.")
+          .number("restitution", &BodySpec::restitution, "-", kUnit,
+                  "Fluid contact: share of the normal relative velocity reversed. Kept for the "
+                  "fluid coupling; not used yet.")
+          .number("slip", &BodySpec::slip, "-", kUnit,
+                  "Fluid contact: share of the tangential relative velocity kept (1 free slip, 0 "
+                  "no slip). Kept for the fluid coupling; not used yet.")
+          .finish([](BodySpec& b, std::size_t index) {
+            if (b.name.empty()) b.name = "body" + std::to_string(index);
+          })
+          .build();
+  return t;
+}
+
+const ObjectTable& fem_table() {
+  static const ObjectTable t =
+      Table<FemSpec>("fem",
+                     "The implicit FEM solve all bodies share. Bodies step with the fluid's time "
+                     "step; without fluid, with steps of at most `simulation.dt_max`, shortened "
+                     "evenly so that every frame falls on the end of a step.")
+          .number("cg_tolerance", &FemSpec::cg_tolerance, "-", Range().gt(0).lt(1),
+                  "Relative residual that ends the conjugate-gradient solve of a step.")
+          .integer("cg_max_iterations", &FemSpec::cg_max_iterations, "-", Range().ge(1),
+                   "Cap on conjugate-gradient iterations per solve.")
+          .integer("newton_iterations", &FemSpec::newton_iterations, "-", Range().ge(1),
+                   "Linearisations per step: 1 is the linearly implicit step; each further one "
+                   "re-extracts the element rotations and solves for a correction.")
+          .integer("rotation_iterations", &FemSpec::rotation_iterations, "-", Range().ge(1),
+                   "Iterations of the element-rotation extraction per linearisation, started "
+                   "from the last step's rotations.")
+          .number("friction", &FemSpec::friction, "-", kNonNegative,
+                  "Coulomb friction coefficient of body nodes sliding on the tank walls.")
           .build();
   return t;
 }
@@ -377,6 +538,8 @@ const ObjectTable& scene_table() {
                   "Time span and solver; see `simulation`.")
           .object("fluid", &SceneSpec::fluid, fluid_table(),
                   "Fluid material and sources; see `fluid`.")
+          .array("bodies", &SceneSpec::bodies, body_table(), "Deformable bodies; see `bodies[]`.")
+          .object("fem", &SceneSpec::fem, fem_table(), "Solver settings of the bodies; see `fem`.")
           .object("domain", &SceneSpec::domain, domain_table(), "The tank; see `domain`.")
           .object("output", &SceneSpec::output, output_table(), "Frame output; see `output`.")
           .array("gauges", &SceneSpec::gauges, gauge_table(), "Probes; see `gauges[]`.")
@@ -404,8 +567,31 @@ SceneSpec example_scene() {
   s.domain.lo = Vec3d(0, 0, 0);
   s.domain.hi = Vec3d(0.8, 0.4, 0.1);
   s.output.fps = 30;
-  s.gauges.push_back({"p_bottom", GaugeKind::Pressure, Vec3d(0.1, 0.005, 0.05)});
-  s.gauges.push_back({"h_wall", GaugeKind::Height, Vec3d(0.79, 0, 0.05)});
+  // A soft cup under the nozzle, its bottom pinned to the floor.
+  BodySpec cup;
+  cup.name = "cup";
+  cup.shape = BodyShape::Cup;
+  cup.position = Vec3d(0.6, 0, 0.05);
+  cup.radius = 0.04;
+  cup.inner_radius = 0.03;
+  cup.height = 0.08;
+  cup.thickness = 0.01;
+  cup.resolution = 8;
+  cup.material.density = 1100;
+  cup.material.young = 2e5;
+  cup.material.poisson = 0.45;
+  cup.material.alpha = 1.0;
+  cup.material.beta = 1e-3;
+  cup.pinned.boxes.push_back({Vec3d(0.56, 0, 0.01), Vec3d(0.64, 0, 0.09)});
+  cup.restitution = 0.2;
+  cup.slip = 0.8;
+  s.bodies.push_back(cup);
+  s.fem.cg_tolerance = 1e-3;
+  s.fem.cg_max_iterations = 200;
+  s.fem.friction = 0.5;
+  s.gauges.push_back({"p_bottom", GaugeKind::Pressure, Vec3d(0.1, 0.005, 0.05), ""});
+  s.gauges.push_back({"h_wall", GaugeKind::Height, Vec3d(0.79, 0, 0.05), ""});
+  s.gauges.push_back({"cup_rim", GaugeKind::Node, Vec3d(0.64, 0.08, 0.05), "cup"});
   return s;
 }
 

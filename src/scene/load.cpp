@@ -16,6 +16,8 @@
 #include <optional>
 #include <sstream>
 
+#include "scene/messages.h"
+#include "sphfem/scene/bodies.h"
 #include "sphfem/scene/fields.h"
 #include "sphfem/sph/model.h"
 
@@ -30,44 +32,7 @@ using scene::format_number;
 using scene::format_value;
 using scene::ObjectTable;
 using scene::Range;
-
-const char* const kAxis[3] = {"x", "y", "z"};
-
-// Messages must stay on one line whatever the input contained.
-std::string one_line(std::string s) {
-  for (char& c : s)
-    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
-  return s;
-}
-
-std::string display_file(const std::string& path) { return path.empty() ? "(scene)" : path; }
-std::string display_at(const std::string& at) { return at.empty() ? "(top level)" : at; }
-
-[[noreturn]] void fail(const std::string& file, const std::string& at, const std::string& what,
-                       const std::string& fix) {
-  throw SceneError(one_line(display_file(file) + ": " + display_at(at) + ": " + what + "; " + fix));
-}
-
-std::string join(const std::string& parent, const std::string& key) {
-  return parent.empty() ? key : parent + "." + key;
-}
-
-std::string indexed(const std::string& at, std::size_t i) {
-  return at + "[" + std::to_string(i) + "]";
-}
-
-std::string in_quotes(const std::string& s) {
-  return json(s).dump(-1, ' ', false, json::error_handler_t::replace);
-}
-
-std::string in_quotes_list(const std::vector<std::string>& names) {
-  std::string s;
-  for (std::size_t i = 0; i < names.size(); ++i) s += (i ? ", " : "") + in_quotes(names[i]);
-  return s;
-}
-
-std::string num(double v) { return format_number(v); }
-std::string vec(const Vec3d& v) { return "[" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + "]"; }
+using namespace scene_text;
 
 // What a JSON value is, for "got ..." in type errors.
 std::string describe(const json& v) {
@@ -100,6 +65,7 @@ std::string unit_suffix(const Field& f) {
 
 // A value that satisfies the field's range, preferably its default, for "e.g." in hints.
 std::string example(const Field& f) {
+  if (f.type == FieldType::IntegerList) return num(f.range.lo ? f.range.lo->value : 0.0);
   if (!f.default_value.is_number()) return format_value(f.default_value);
   const Range& r = f.range;
   std::vector<double> candidates = {f.default_value.get<double>()};
@@ -117,6 +83,8 @@ std::string expected(const Field& f) {
       return "a number" + unit_suffix(f);
     case FieldType::Integer:
       return "an integer" + unit_suffix(f);
+    case FieldType::IntegerList:
+      return "an array of integers [i, j, ...]";
     case FieldType::Bool:
       return "true or false";
     case FieldType::String:
@@ -139,6 +107,8 @@ std::string type_fix(const Field& f) {
       return "write a number without quotes, e.g. " + example(f);
     case FieldType::Integer:
       return "write a whole number without quotes, e.g. " + example(f);
+    case FieldType::IntegerList:
+      return "write whole numbers in brackets, e.g. [0, 1], or [] for none";
     case FieldType::Bool:
       return "write true or false without quotes";
     case FieldType::String:
@@ -202,7 +172,7 @@ void check_number(const Field& f, double v, const std::string& at, const std::st
     fail(file, at, "must be a finite number (got " + num(v) + ")",
          "write an ordinary number" + unit_suffix(f) + ", e.g. " + example(f));
   Range r = f.range;
-  if (f.type == FieldType::Integer) {
+  if (f.type == FieldType::Integer || f.type == FieldType::IntegerList) {
     if (v != std::floor(v))
       fail(file, at, "expected an integer, got a number (" + num(v) + ")",
            "write a whole number, e.g. " + example(f));
@@ -251,6 +221,15 @@ class Reader {
         if (!v.is_number()) wrong_type(f, v, at);
         check_number(f, v.get<double>(), at, file_);
         store(f, owner, json(v.get<double>()), at);
+        return;
+      case FieldType::IntegerList:
+        if (!v.is_array()) wrong_type(f, v, at);
+        for (std::size_t i = 0; i < v.size(); ++i) {
+          if (!v[i].is_number())
+            fail(file_, indexed(at, i), "expected an integer, got " + describe(v[i]), type_fix(f));
+          check_number(f, v[i].get<double>(), indexed(at, i), file_);
+        }
+        store(f, owner, v, at);
         return;
       case FieldType::Bool:
         if (!v.is_boolean()) wrong_type(f, v, at);
@@ -334,6 +313,12 @@ void check_fields(const ObjectTable& t, const void* owner, const std::string& at
       case FieldType::Integer:
         check_number(f, f.get(owner).get<double>(), here, file);
         break;
+      case FieldType::IntegerList: {
+        const json v = f.get(owner);
+        for (std::size_t i = 0; i < v.size(); ++i)
+          check_number(f, v[i].get<double>(), indexed(here, i), file);
+        break;
+      }
       case FieldType::Vec3: {
         const json v = f.get(owner);
         for (std::size_t i = 0; i < 3; ++i) {
@@ -409,6 +394,46 @@ double disc_reach(const Vec3d& d, double r, int k) {
   return r * std::sqrt(std::max(0.0, 1.0 - d[k] * d[k]));
 }
 
+// A node gauge follows a body by name; the other kinds sample the fluid and take no body.
+void check_gauge_body(const SceneSpec& s, const GaugeSpec& g, const std::string& at,
+                      const std::string& path) {
+  if (g.kind != GaugeKind::Node) {
+    if (!g.body.empty())
+      fail(path, at + ".body", "only node gauges follow a body",
+           "remove body, or set type to \"node\" to follow a node of " + in_quotes(g.body));
+    return;
+  }
+  std::vector<std::string> bodies;
+  for (const BodySpec& b : s.bodies) bodies.push_back(b.name);
+  const std::string choose = bodies.empty()
+                                 ? "add the body to bodies, or use a pressure or height gauge"
+                                 : "set body to one of " + in_quotes_list(bodies);
+  if (g.body.empty()) fail(path, at + ".body", "a node gauge needs the body it follows", choose);
+  if (body_index(s, g.body) < 0)
+    fail(path, at + ".body", "there is no body named " + in_quotes(g.body), choose);
+}
+
+// The gauges.csv columns the scene names (each body's energies, each gauge's values) must
+// differ, or two quantities would share a heading.
+void check_gauge_columns(const SceneSpec& s, const std::string& path) {
+  std::map<std::string, std::string> owner;
+  for (std::size_t i = 0; i < s.bodies.size(); ++i)
+    for (const char* suffix : {"_kinetic_energy", "_elastic_energy"})
+      owner.emplace(s.bodies[i].name + suffix, indexed("bodies", i));
+  for (std::size_t i = 0; i < s.gauges.size(); ++i) {
+    const GaugeSpec& g = s.gauges[i];
+    std::vector<std::string> columns = {g.name};
+    if (g.kind == GaugeKind::Node) columns = {g.name + "_dx", g.name + "_dy", g.name + "_dz"};
+    for (const std::string& c : columns) {
+      const auto [it, fresh] = owner.emplace(c, indexed("gauges", i));
+      if (!fresh)
+        fail(path, indexed("gauges", i) + ".name",
+             "its column " + in_quotes(c) + " is also a column of " + it->second,
+             "rename the gauge");
+    }
+  }
+}
+
 // "line L, column C" of a 1-based byte position as nlohmann reports it; one past the end is EOF.
 std::string text_position(const std::string& text, std::size_t byte) {
   const std::size_t end = std::min<std::size_t>(std::max<std::size_t>(byte, 1), text.size() + 1);
@@ -459,7 +484,8 @@ void validate_scene(const SceneSpec& s, const std::string& path) {
 
   const double spacing = 2.0 * s.fluid.particle_radius;
   const double narrowest = std::min({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-  for (int k = 0; k < 3; ++k) {
+  // The particle size only matters to a scene that has fluid.
+  for (int k = 0; k < 3 && s.has_fluid(); ++k) {
     const double cells = (hi[k] - lo[k]) / spacing;
     if (cells < scene::kMinDomainSpacings * (1 - 1e-9))
       fail(path, "fluid.particle_radius",
@@ -470,10 +496,11 @@ void validate_scene(const SceneSpec& s, const std::string& path) {
                " m or widen the domain on " + kAxis[k]);
   }
 
-  if (s.fluid.blocks.empty() && s.fluid.emitters.empty())
-    fail(path, "fluid", "the scene has no fluid (fluid.blocks and fluid.emitters are both empty)",
-         "add a box to fluid.blocks, e.g. {\"min\": " + vec(lo) +
-             ", \"max\": " + vec(lo + (hi - lo) * 0.25) + "}, or an emitter to fluid.emitters");
+  if (!s.has_fluid() && s.bodies.empty())
+    fail(path, "fluid",
+         "the scene has no fluid (fluid.blocks and fluid.emitters are both empty) and no bodies",
+         "add a box to fluid.blocks, e.g. {\"min\": " + vec(lo) + ", \"max\": " +
+             vec(lo + (hi - lo) * 0.25) + "}, an emitter to fluid.emitters or a body to bodies");
 
   for (std::size_t i = 0; i < s.fluid.blocks.size(); ++i) {
     const FluidBlockSpec& b = s.fluid.blocks[i];
@@ -547,6 +574,8 @@ void validate_scene(const SceneSpec& s, const std::string& path) {
            "set end greater than start, or leave end out to emit until the run ends");
   }
 
+  check_bodies(s, path);
+
   std::map<std::string, std::size_t> names;
   for (std::size_t i = 0; i < s.gauges.size(); ++i) {
     const GaugeSpec& g = s.gauges[i];
@@ -568,10 +597,12 @@ void validate_scene(const SceneSpec& s, const std::string& path) {
                  wall_text(g.position, k) + ")",
              "put the gauge inside the domain " + box);
     }
+    check_gauge_body(s, g, at, path);
   }
+  check_gauge_columns(s, path);
 
   // Solver-specific checks (time step vs CFL) come from the solver that knows its limits.
-  const std::string solver_problem = check_solver_settings(s);
+  const std::string solver_problem = s.has_fluid() ? check_solver_settings(s) : "";
   if (!solver_problem.empty())
     throw SceneError(one_line(display_file(path) + ": " + solver_problem));
 }
@@ -646,6 +677,8 @@ const char* type_name(FieldType t) {
       return "number";
     case FieldType::Integer:
       return "integer";
+    case FieldType::IntegerList:
+      return "array of integers";
     case FieldType::Bool:
       return "boolean";
     case FieldType::String:
@@ -677,7 +710,10 @@ void markdown_section(const ObjectTable& t, std::ostringstream& md) {
      << "|---|---|---|---|---|---|\n";
   for (const Field& f : t.fields) {
     std::string range;
-    if (f.type == FieldType::Number || f.type == FieldType::Integer) range = f.range.text();
+    if (f.type == FieldType::Number || f.type == FieldType::Integer ||
+        f.type == FieldType::IntegerList)
+      range = f.range.text();
+    if (f.type == FieldType::IntegerList && !range.empty()) range = "each " + range;
     if (f.type == FieldType::Enum) {
       for (std::size_t i = 0; i < f.choices.size(); ++i)
         range += (i ? ", " : "") + code(in_quotes(f.choices[i]));
@@ -706,7 +742,8 @@ std::string scene_format_markdown() {
      << "- All quantities are in SI units (metres, seconds, kilograms); the Unit column names "
         "each one, and `-` marks a dimensionless number.\n"
      << "- Every section and every field is optional and takes the default shown. The scene "
-        "must still contain fluid: at least one entry in `fluid.blocks` or `fluid.emitters`.\n"
+        "must still contain something to simulate: at least one entry in `fluid.blocks`, "
+        "`fluid.emitters` or `bodies`.\n"
      << "- Unknown keys are errors, so a misspelt field never falls back to its default "
         "silently; the message suggests the nearest allowed name.\n"
      << "- A `vec3` is an array of exactly three numbers `[x, y, z]`; y points up. Numbers "
@@ -721,17 +758,27 @@ std::string scene_format_markdown() {
   md << "## Checks across fields\n\n"
      << "After every field has been read, the scene as a whole must satisfy:\n\n"
      << "- `domain.min` < `domain.max` on every axis.\n"
-     << "- The domain is at least " << k << " particle spacings (2 * `particle_radius`) wide "
-     << "on every axis.\n"
+     << "- With fluid, the domain is at least " << k
+     << " particle spacings (2 * `particle_radius`) wide on every axis.\n"
      << "- `simulation.dt_min` <= `simulation.dt_max`.\n"
-     << "- At least one block or emitter.\n"
+     << "- At least one block, emitter or body.\n"
      << "- Each block has `min` < `max`, lies inside the domain and is at least one particle "
         "spacing thick on every axis.\n"
      << "- Each emitter's nozzle (the disc of `radius` around `position`, perpendicular to "
         "`direction`) lies inside the domain, its `radius` is at least one particle spacing, "
         "`direction` is non-zero and `start` < `end`.\n"
      << "- Each gauge lies inside the domain (a height gauge in x and z only) and gauge names "
-        "are unique.\n"
+        "are unique; a node gauge names a body, other gauges none; no two gauges.csv columns "
+        "the scene names (`<gauge>`, `<gauge>_dx`, `<body>_kinetic_energy`, ...) are equal.\n"
+     << "- Body names are unique. Box edges are positive (a cloth's on x and z); a tube's or "
+        "cup's `inner_radius` is below its `radius`, a cup's bottom `thickness` below its "
+        "`height`; a cup has at least 4 cells across, a sphere 2; a shape makes at most "
+     << scene::kMaxBodyTets << " tetrahedra.\n"
+     << "- A mesh body names a `file` that reads as a closed, manifold, consistently oriented "
+        "surface without self-intersections (tetrahedralised with `max_volume` and "
+        "`quality`), or as a tetrahedral mesh without inverted elements.\n"
+     << "- Every body lies inside the domain; each pinned box holds at least one of its rest "
+        "nodes and each pinned index is below its node count.\n"
      << "- The solver adds its own checks, such as the time step against the CFL condition.\n\n";
 
   const SceneSpec sample = scene::example_scene();

@@ -56,8 +56,9 @@ FrameMetrics compute_metrics(const FluidSnapshot& s, const FluidModel& m,
   }
   f.mean_density_error = s.n ? err_sum / s.n : 0.0;
   for (const GaugeSpec& g : gauges)
-    f.probes.push_back(g.kind == GaugeKind::Pressure ? pressure_at(s, m, g.position)
-                                                     : height_at(s, m, g.position, domain.lo.y));
+    if (g.kind != GaugeKind::Node)
+      f.probes.push_back(g.kind == GaugeKind::Pressure ? pressure_at(s, m, g.position)
+                                                       : height_at(s, m, g.position, domain.lo.y));
   return f;
 }
 

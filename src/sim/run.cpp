@@ -1,3 +1,4 @@
+// The run loop: fluid step, then the bodies with the same dt; frames, gauges and progress.
 #include "sphfem/sim/run.h"
 
 #include <unistd.h>
@@ -6,16 +7,20 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
+#include "sphfem/fem/energy.h"
+#include "sphfem/fem/solver.h"
 #include "sphfem/io/atomic_file.h"
 #include "sphfem/io/gauges.h"
 #include "sphfem/io/ply.h"
 #include "sphfem/io/pvd.h"
 #include "sphfem/io/vtu.h"
+#include "sphfem/scene/bodies.h"
+#include "sphfem/sim/body_frames.h"
 #include "sphfem/sim/metrics.h"
 #include "sphfem/sph/solver.h"
 
@@ -50,17 +55,80 @@ io::PointSet fluid_frame(const FluidSnapshot& s) {
 }
 
 std::vector<std::string> gauge_columns(const SceneSpec& scene) {
-  std::vector<std::string> c = {"time",           "step",
-                                "dt",             "n_fluid",
-                                "fluid_front_x",  "max_density_error",
-                                "mean_density_error", "kinetic_energy",
-                                "momentum_x",     "momentum_y",
-                                "momentum_z",     "clamped",
-                                "pressure_iterations", "divergence_iterations"};
-  for (int p = 0; p < int(Phase::Count); ++p) c.push_back(std::string("ms_") + phase_name(Phase(p)));
+  std::vector<std::string> c = {"time",
+                                "step",
+                                "dt",
+                                "n_fluid",
+                                "fluid_front_x",
+                                "max_density_error",
+                                "mean_density_error",
+                                "kinetic_energy",
+                                "momentum_x",
+                                "momentum_y",
+                                "momentum_z",
+                                "clamped",
+                                "pressure_iterations",
+                                "divergence_iterations",
+                                "fem_cg_iterations"};
+  for (int p = 0; p < int(Phase::Count); ++p)
+    c.push_back(std::string("ms_") + phase_name(Phase(p)));
+  c.push_back("ms_fem");
   c.push_back("ms_step");
-  for (const GaugeSpec& g : scene.gauges) c.push_back(g.name);
+  for (const GaugeSpec& g : scene.gauges) {
+    if (g.kind != GaugeKind::Node) {
+      c.push_back(g.name);
+      continue;
+    }
+    for (const char* axis : {"_dx", "_dy", "_dz"}) c.push_back(g.name + axis);
+  }
+  for (const BodySpec& b : scene.bodies) {
+    c.push_back(b.name + "_kinetic_energy");
+    c.push_back(b.name + "_elastic_energy");
+  }
   return c;
+}
+
+// Global node followed by each node gauge, -1 for the fluid gauges.
+std::vector<int> gauge_nodes(const SceneSpec& scene, const BodiesModel& bodies) {
+  std::vector<int> nodes;
+  for (const GaugeSpec& g : scene.gauges) {
+    if (g.kind != GaugeKind::Node) {
+      nodes.push_back(-1);
+      continue;
+    }
+    const int b = body_index(scene, g.body);
+    if (b < 0)
+      throw std::runtime_error("gauge '" + g.name + "' follows body '" + g.body +
+                               "', which the scene does not have");
+    nodes.push_back(nearest_rest_node(bodies, b, g.position));
+  }
+  return nodes;
+}
+
+// The first body with a non-finite node, or -1.
+int non_finite_body(const BodiesModel& m, const BodySnapshot& s) {
+  for (std::size_t b = 0; b + 1 < m.node_offset.size(); ++b)
+    for (int i = m.node_offset[b]; i < m.node_offset[b + 1]; ++i)
+      for (int c = 0; c < 3; ++c)
+        if (!std::isfinite(double(s.x[i][c])) || !std::isfinite(double(s.v[i][c]))) return int(b);
+  return -1;
+}
+
+std::string fmt(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+// A body that blew up, reported as the fluid reports its own: the step, the body, the fix.
+SimulationError body_blow_up(long step, double t, const BodiesModel& m, int body) {
+  const std::string who = body >= 0 ? "body \"" + m.bodies[std::size_t(body)].name + "\" (bodies[" +
+                                          std::to_string(body) + "]) became"
+                                    : "the FEM solve of the bodies became";
+  return SimulationError(step, "step " + std::to_string(step) + " (t = " + fmt(t) + " s): " + who +
+                                   " non-finite (NaN); lower simulation.dt_max, raise "
+                                   "fem.cg_max_iterations or fem.newton_iterations, or check "
+                                   "the bodies' material values");
 }
 
 class Progress {
@@ -102,18 +170,39 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
   if (opt.threads > 0) set_cpu_threads(opt.threads);
   const double duration = opt.duration >= 0 ? opt.duration : scene.simulation.duration;
   // Everything that can fail on input happens before the first file is written.
-  const FluidModel model = compile_fluid(scene);
-  std::unique_ptr<FluidSolver> solver = make_fluid_solver(model, opt.backend);
+  if (!scene.has_fluid() && scene.bodies.empty())
+    throw std::runtime_error(
+        "the scene has nothing to simulate; add fluid.blocks, fluid.emitters or bodies");
+  FluidModel model;
+  std::unique_ptr<FluidSolver> solver;
+  if (scene.has_fluid()) {
+    model = compile_fluid(scene);
+    solver = make_fluid_solver(model, opt.backend);
+  }
+  BodiesModel bodies;
+  std::unique_ptr<BodySolver> fem;
+  if (!scene.bodies.empty()) {
+    bodies = compile_scene_bodies(scene);
+    fem = make_body_solver(bodies, opt.backend);
+  }
+  const std::vector<int> gauge_node = gauge_nodes(scene, bodies);
 
   RunSummary sum;
   sum.out_dir = opt.out_dir;
   const std::string frames_dir = opt.out_dir + "/frames";
   io::ensure_directory(frames_dir);
   io::GaugeWriter gauges(opt.out_dir + "/gauges.csv", gauge_columns(scene));
-  std::unique_ptr<io::PvdCollection> pvd;
-  if (scene.output.vtu) pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/fluid.pvd");
+  std::unique_ptr<io::PvdCollection> pvd, bodies_pvd, tets_pvd;
+  if (scene.output.vtu && solver)
+    pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/fluid.pvd");
+  if (scene.output.vtu && fem) {
+    bodies_pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/bodies.pvd");
+    tets_pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/bodies_tets.pvd");
+  }
 
   // What a reader of the folder needs besides the frames (the renderer: radius and tank).
+  nlohmann::json body_names = nlohmann::json::array();
+  for (const BodySpec& b : scene.bodies) body_names.push_back(b.name);
   nlohmann::json info = {
       {"scene", scene.path},
       {"name", scene.name},
@@ -123,7 +212,8 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
         {"max", {scene.domain.hi.x, scene.domain.hi.y, scene.domain.hi.z}}}},
       {"solver", scene.simulation.solver == SolverKind::DFSPH ? "dfsph" : "wcsph"},
       {"backend", opt.backend == Backend::Cuda ? "cuda" : "cpu"},
-      {"fps", scene.output.fps}};
+      {"fps", scene.output.fps},
+      {"bodies", body_names}};
   io::write_file_atomic(opt.out_dir + "/run.json", info.dump(2) + "\n");
 
   const double frame_dt = 1.0 / scene.output.fps;
@@ -131,24 +221,56 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
   auto wall = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
   Progress progress(opt.progress, duration);
   FluidSnapshot snap;
+  BodySnapshot body_snap;
+  std::unique_ptr<BodyFrames> body_frames;
+  std::unique_ptr<BodyEnergyMeter> meter;
+  if (fem) {
+    body_frames = std::make_unique<BodyFrames>(fem->model());
+    meter = std::make_unique<BodyEnergyMeter>(fem->model());
+  }
   StepInfo last;
-  long steps_since = 0, piter = 0, diter = 0, clamped = 0;
+  double t = 0;
+  long steps = 0, steps_since = 0, piter = 0, diter = 0, clamped = 0;
+
+  auto body_metrics = [&](BodyMetrics& bm) {
+    fem->snapshot(body_snap);
+    const int bad = non_finite_body(bodies, body_snap);
+    if (bad >= 0) throw body_blow_up(steps, t, bodies, bad);
+    meter->measure(body_snap, bm.kinetic_energy, bm.elastic_energy);
+    for (int node : gauge_node)
+      if (node >= 0) bm.displacement.push_back(Vec3d(body_snap.x[node] - bodies.x0[node]));
+  };
 
   auto write_frame = [&](int frame) {
-    solver->snapshot(snap);
     char name[64];
-    std::snprintf(name, sizeof name, "fluid_%06d", frame);
-    const io::PointSet ps = fluid_frame(snap);
-    if (scene.output.vtu) {
-      io::write_vtu(frames_dir + "/" + name + ".vtu", ps);
-      pvd->add(solver->time(), std::string("frames/") + name + ".vtu");
-    }
-    if (scene.output.ply) io::write_ply(frames_dir + "/" + name + ".ply", ps);
+    // Bodies first: a blown-up body stops the run before any part of this frame is written.
+    BodyMetrics bm;
+    if (fem) body_metrics(bm);
+    if (solver) solver->snapshot(snap);
     const FrameMetrics m = compute_metrics(snap, model, scene.gauges, scene.domain);
-    const Profile& prof = solver->profile();
+    if (solver && (scene.output.vtu || scene.output.ply)) {
+      std::snprintf(name, sizeof name, "fluid_%06d", frame);
+      const io::PointSet ps = fluid_frame(snap);
+      if (scene.output.vtu) {
+        io::write_vtu(frames_dir + "/" + name + ".vtu", ps);
+        pvd->add(t, std::string("frames/") + name + ".vtu");
+      }
+      if (scene.output.ply) io::write_ply(frames_dir + "/" + name + ".ply", ps);
+    }
+    if (fem && scene.output.vtu) {
+      std::snprintf(name, sizeof name, "bodies_%06d.vtu", frame);
+      io::write_vtu(frames_dir + "/" + name, body_frames->surface(body_snap));
+      bodies_pvd->add(t, std::string("frames/") + name);
+      std::snprintf(name, sizeof name, "bodies_tets_%06d.vtu", frame);
+      io::write_vtu(frames_dir + "/" + name, body_frames->tets(body_snap));
+      tets_pvd->add(t, std::string("frames/") + name);
+    }
+    const Profile prof = solver ? solver->profile() : Profile();
+    const BodyProfile fprof = fem ? fem->profile() : BodyProfile();
     const double per = prof.steps ? 1.0 / double(prof.steps) : 0.0;
-    std::vector<double> row = {solver->time(),
-                               double(solver->steps()),
+    const double fper = fprof.steps ? 1.0 / double(fprof.steps) : 0.0;
+    std::vector<double> row = {t,
+                               double(steps),
                                last.dt,
                                double(snap.n),
                                m.front_x,
@@ -160,45 +282,94 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
                                m.momentum[2],
                                double(clamped),
                                steps_since ? double(piter) / steps_since : 0.0,
-                               steps_since ? double(diter) / steps_since : 0.0};
+                               steps_since ? double(diter) / steps_since : 0.0,
+                               double(fprof.cg_iterations) * fper};
     double total = 0;
     for (int p = 0; p < int(Phase::Count); ++p) {
       row.push_back(prof.ms[p] * per);
       total += prof.ms[p] * per;
     }
+    row.push_back(fprof.ms_total() * fper);
+    total += fprof.ms_total() * fper;
     row.push_back(total);
-    for (double v : m.probes) row.push_back(v);
+    std::size_t probe = 0, followed = 0;
+    for (const GaugeSpec& g : scene.gauges) {
+      if (g.kind != GaugeKind::Node) {
+        row.push_back(m.probes.at(probe++));
+        continue;
+      }
+      const Vec3d d = bm.displacement.at(followed++);
+      row.insert(row.end(), {d.x, d.y, d.z});
+    }
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+      row.push_back(bm.kinetic_energy.at(b));
+      row.push_back(bm.elastic_energy.at(b));
+    }
     gauges.row(row);
-    solver->reset_profile();
+    if (solver) solver->reset_profile();
+    if (fem) fem->reset_profile();
     steps_since = piter = diter = 0;
     ++sum.frames;
   };
 
-  write_frame(0);
-  int frame = 1;
-  while (solver->time() < duration - 1e-12) {
-    const double next = std::min(duration, frame * frame_dt);
+  // The bodies step with the fluid's dt and feel no fluid yet: the ray-traced two-way
+  // coupling (docs/design.md) is not implemented, so fluid and bodies only share the clock.
+  auto step_bodies = [&](double dt) {
+    bool finite = true;
     try {
-      last = solver->step(next - solver->time());
-    } catch (const SimulationError&) {
-      progress.done();
-      throw;
+      finite = std::isfinite(fem->step(dt).cg_residual);
+    } catch (const std::runtime_error&) {
+      finite = false;  // the solver's own NaN check: the right-hand side was not finite
     }
-    ++steps_since;
-    piter += last.pressure_iterations;
-    diter += last.divergence_iterations;
-    clamped += last.clamped;
-    if (solver->time() >= next - 1e-9 * std::max(1.0, next)) {
-      write_frame(frame);
-      ++frame;
+    if (!finite) {
+      fem->snapshot(body_snap);
+      throw body_blow_up(steps, t, bodies, non_finite_body(bodies, body_snap));
     }
-    progress.update(solver->time(), solver->steps(), wall(), false);
+  };
+
+  try {
+    write_frame(0);
+    int frame = 1;
+    const double dt_max = scene.simulation.dt_max;
+    while (t < duration - 1e-12) {
+      const double next = std::min(duration, frame * frame_dt);
+      double dt = 0;
+      if (solver) {
+        last = solver->step(next - t);
+        dt = last.dt;
+        t = solver->time();
+      } else {
+        // Without fluid: equal steps of at most dt_max that end on the frame's time.
+        const double left = next - t;
+        const double n = std::max(1.0, std::ceil(left / dt_max - 1e-9));
+        dt = left / n;
+        last = StepInfo();
+        last.dt = dt;
+        t = n <= 1.0 ? next : t + dt;
+      }
+      ++steps;
+      if (fem) step_bodies(dt);
+      ++steps_since;
+      piter += last.pressure_iterations;
+      diter += last.divergence_iterations;
+      clamped += last.clamped;
+      if (t >= next - 1e-9 * std::max(1.0, next)) {
+        write_frame(frame);
+        ++frame;
+      }
+      progress.update(t, steps, wall(), false);
+    }
+  } catch (const SimulationError&) {
+    progress.done();
+    throw;
   }
-  progress.update(solver->time(), solver->steps(), wall(), true);
+  progress.update(t, steps, wall(), true);
   progress.done();
-  sum.steps = solver->steps();
-  sum.particles = solver->count();
-  sum.sim_seconds = solver->time();
+  sum.steps = steps;
+  sum.particles = solver ? solver->count() : 0;
+  sum.bodies = int(bodies.bodies.size());
+  sum.body_nodes = bodies.nodes;
+  sum.sim_seconds = t;
   sum.wall_seconds = wall();
   return sum;
 }

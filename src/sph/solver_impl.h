@@ -25,9 +25,14 @@ class SolverT final : public FluidSolver {
     const MemSpace s = Exec::kSpace;
     cap_ = std::max<int>(m.capacity, int(m.x0.size()));
     for (Buffer<Vec3>* b : {&x_, &v_, &a_, &tmp3_}) *b = Buffer<Vec3>(s, cap_);
-    for (Buffer<Real>* b : {&rho_, &p_, &alpha_, &kappa_, &tmpr_}) *b = Buffer<Real>(s, cap_);
+    for (Buffer<Real>* b : {&rho_, &p_, &alpha_, &kappa_, &ksum_, &warm_div_, &warm_dens_, &tmpr_})
+      *b = Buffer<Real>(s, cap_);
+    warm_div_.zero();
+    warm_dens_.zero();
     nb_ = Buffer<int>(s, cap_);
-    for (Buffer<std::uint32_t>* b : {&id_, &tmpu_, &keys_, &perm_}) *b = Buffer<std::uint32_t>(s, cap_);
+    full_ = Buffer<int>(s, cap_);
+    for (Buffer<std::uint32_t>* b : {&id_, &tmpu_, &keys_, &perm_})
+      *b = Buffer<std::uint32_t>(s, cap_);
     start_ = Buffer<std::uint32_t>(s, std::size_t(m.grid.cells()) + 1);
 
     n_ = int(m.x0.size());
@@ -61,24 +66,39 @@ class SolverT final : public FluidSolver {
     const GridView g = grid(start_.data());
     const BoundaryView b = boundary();
     FluidView f = view();
-    timed(Phase::Density, [&] { stages::density(ex_, P_, f, g, b, dfsph); });
+    timed(Phase::Density, [&] {
+      stages::density(ex_, P_, f, g, b, dfsph);
+      if (dfsph) {
+        active_walls_ = stages::wall_density(ex_, P_, f, g, b);
+        stages::dfsph_smooth_warm(ex_, P_, f, g, b, tmpr_.data());
+        warm_dens_.swap(tmpr_);
+        f.warm_dens = warm_dens_.data();
+      }
+    });
     if (dfsph) p_.zero();
 
-    const double dt = choose_dt(dt_limit);
+    double dt_free = 0;
+    const double dt = choose_dt(dt_limit, dt_free);
     const Real rdt = Real(dt);
+    // How much of a full step this one is: the pace of density corrections and the weight of
+    // this step in the warm starts (stages::dfsph_source, stages::dfsph_remember).
+    const Real pace = Real(dt / dt_free);
     info.dt = dt;
     if (dfsph) {
       timed(Phase::Divergence, [&] {
-        info.divergence_iterations = solve(f, g, b, rdt, true, model_.divergence_tolerance);
+        info.divergence_iterations = solve(f, g, b, rdt, pace, true, model_.divergence_tolerance);
       });
       timed(Phase::Forces, [&] { stages::accelerations(ex_, P_, f, g, b, false, rdt); });
       timed(Phase::Integrate, [&] { stages::kick(ex_, f, rdt); });
       timed(Phase::Pressure, [&] {
-        info.pressure_iterations = solve(f, g, b, rdt, false, model_.density_tolerance);
+        info.pressure_iterations = solve(f, g, b, rdt, pace, false, model_.density_tolerance);
         info.density_error = last_error_;
       });
     } else {
-      timed(Phase::Forces, [&] { stages::accelerations(ex_, P_, f, g, b, true, rdt); });
+      timed(Phase::Forces, [&] {
+        stages::wall_pressure(ex_, P_, f, g, b);
+        stages::accelerations(ex_, P_, f, g, b, true, rdt);
+      });
       timed(Phase::Integrate, [&] { stages::kick(ex_, f, rdt); });
     }
     timed(Phase::Integrate, [&] { info.clamped = stages::drift(ex_, P_, f, rdt); });
@@ -134,8 +154,19 @@ class SolverT final : public FluidSolver {
 
   BoundaryView boundary() {
     BoundaryView b;
+    b.n = int(model_.boundary_x.size());
     b.x = bx_.data();
     b.psi = bpsi_.data();
+    b.rest = brest_.data();
+    b.nb_rest = bnb_rest_.data();
+    b.pw = bpw_.data();
+    b.rho = brho_.data();
+    b.alpha = balpha_.data();
+    b.full = bfull_.data();
+    b.kappa = bkappa_.data();
+    b.kappa_sum = bksum_.data();
+    b.warm_div = bwarm_div_.data();
+    b.warm_dens = bwarm_dens_.data();
     b.grid = grid(bstart_.data());
     if (model_.boundary_x.empty()) b.grid.nx = 0;
     return b;
@@ -151,6 +182,11 @@ class SolverT final : public FluidSolver {
     f.p = p_.data();
     f.alpha = alpha_.data();
     f.kappa = kappa_.data();
+    f.kappa_sum = ksum_.data();
+    f.warm_div = warm_div_.data();
+    f.warm_dens = warm_dens_.data();
+    f.full = full_.data();
+    f.gwall = tmp3_.data();  // free between the sort and the next one
     f.nb = nb_.data();
     f.id = id_.data();
     return f;
@@ -175,6 +211,12 @@ class SolverT final : public FluidSolver {
     id_.swap(tmpu_);
     stages::gather(ex_, p_.data(), tmpr_.data(), perm_.data(), n_);
     p_.swap(tmpr_);
+    if (model_.solver == SolverKind::DFSPH) {
+      stages::gather(ex_, warm_div_.data(), tmpr_.data(), perm_.data(), n_);
+      warm_div_.swap(tmpr_);
+      stages::gather(ex_, warm_dens_.data(), tmpr_.data(), perm_.data(), n_);
+      warm_dens_.swap(tmpr_);
+    }
     stages::cell_starts(ex_, keys_.data(), start_.data(), n_, g.cells());
   }
 
@@ -183,6 +225,13 @@ class SolverT final : public FluidSolver {
     const int nb = int(model_.boundary_x.size());
     bx_ = Buffer<Vec3>(s, std::max(nb, 1));
     bpsi_ = Buffer<Real>(s, std::max(nb, 1));
+    for (Buffer<Real>* w :
+         {&brest_, &bpw_, &brho_, &balpha_, &bkappa_, &bksum_, &bwarm_div_, &bwarm_dens_}) {
+      *w = Buffer<Real>(s, std::max(nb, 1));
+      w->zero();
+    }
+    bnb_rest_ = Buffer<int>(s, std::max(nb, 1));
+    bfull_ = Buffer<int>(s, std::max(nb, 1));
     bstart_ = Buffer<std::uint32_t>(s, std::size_t(model_.grid.cells()) + 1);
     Buffer<Vec3> x(s, std::max(nb, 1));
     Buffer<Real> psi(s, std::max(nb, 1));
@@ -195,11 +244,13 @@ class SolverT final : public FluidSolver {
     stages::gather(ex_, x.data(), bx_.data(), perm.data(), nb);
     stages::gather(ex_, psi.data(), bpsi_.data(), perm.data(), nb);
     stages::cell_starts(ex_, keys.data(), bstart_.data(), nb, g.cells());
+    stages::wall_rest(ex_, P_, brest_.data(), bnb_rest_.data(), boundary());
     exec_sync(ex_);
   }
 
-  // CFL step: the particle spacing over the fastest speed (plus sound speed for WCSPH).
-  double choose_dt(double dt_limit) {
+  // CFL step: the particle spacing over the fastest speed (plus sound speed for WCSPH), capped
+  // by dt_max; dt_free is that step before dt_limit shortens it.
+  double choose_dt(double dt_limit, double& dt_free) {
     const Real v2 = stages::max_speed2(ex_, view());
     if (!(v2 < Real(3e38)))
       throw SimulationError(
@@ -220,21 +271,34 @@ class SolverT final : public FluidSolver {
                       " s (fastest particle " + fmt(vmax) +
                       " m/s); lower simulation.dt_max, raise fluid.stiffness for WCSPH, add "
                       "fluid.viscosity, or use simulation.solver \"dfsph\"");
-    dt = std::min({dt, model_.dt_max, dt_limit});
-    return std::max(dt, 1e-12);
+    dt_free = std::min(dt, model_.dt_max);
+    dt = std::max(std::min(dt_free, dt_limit), 1e-12);
+    dt_free = std::max(dt_free, dt);
+    return dt;
   }
 
-  // DFSPH Jacobi iterations until the mean error is below tol; returns the iterations used.
-  int solve(FluidView f, const GridView& g, const BoundaryView& b, Real dt, bool divergence,
-            double tol) {
+  // One DFSPH solve: the warm start, then projected Jacobi sweeps over fluid and wall samples
+  // until their mean residual is below tol; returns the sweeps after the warm start. At least
+  // kMinSweeps run, so the pressure keeps building while the mean error is still small
+  // (Bender & Koschier 2017 also iterate at least twice): without them a resting column fell
+  // freely until its bottom layers were compressed by several per cent.
+  int solve(FluidView f, const GridView& g, const BoundaryView& b, Real dt, Real pace,
+            bool divergence, double tol) {
+    stages::dfsph_warm_start(ex_, f, b, divergence);
+    stages::dfsph_apply(ex_, P_, f, g, b, dt);
+    const int samples = n_ + active_walls_;
     int it = 0;
     last_error_ = 0;
     for (;; ++it) {
-      const double err = n_ ? stages::dfsph_source(ex_, P_, f, g, b, dt, divergence) / n_ : 0.0;
+      const double sum = stages::dfsph_source(ex_, P_, f, g, b, dt, pace, divergence) +
+                         stages::wall_source(ex_, P_, f, g, b, dt, pace, divergence);
+      const double err = samples ? sum / samples : 0.0;
       last_error_ = err;
-      if (err <= tol || it >= model_.max_iterations) break;
-      stages::dfsph_apply(ex_, P_, f, g, b, dt, true);
+      if ((err <= tol && it >= kMinSweeps) || it >= model_.max_iterations) break;
+      stages::dfsph_apply(ex_, P_, f, g, b, dt);
     }
+    const Real memory = divergence ? Real(1) : stages::kDfsphMemory;
+    stages::dfsph_remember(ex_, f, memory * pace, divergence);
     return it;
   }
 
@@ -249,13 +313,14 @@ class SolverT final : public FluidSolver {
       while (travelled_[e] >= em.layer_spacing) {
         travelled_[e] -= em.layer_spacing;
         if (n_ + k > cap_) {
-          if (!capacity_warned_) std::fprintf(stderr, "warning: particle capacity %d reached; emitters stop\n", cap_);
+          if (!capacity_warned_)
+            std::fprintf(stderr, "warning: particle capacity %d reached; emitters stop\n", cap_);
           capacity_warned_ = true;
           break;
         }
         const Vec3 origin = em.position + em.direction * Real(travelled_[e]);
-        stages::emit_layer(ex_, view(), discs_[e].data(), k, n_, origin,
-                           em.direction * em.speed, next_id_);
+        stages::emit_layer(ex_, view(), discs_[e].data(), k, n_, origin, em.direction * em.speed,
+                           next_id_);
         n_ += k;
         next_id_ += std::uint32_t(k);
         emitted += k;
@@ -277,17 +342,21 @@ class SolverT final : public FluidSolver {
   double t_ = 0, last_dt_ = 0, last_error_ = 0;
   long steps_ = 0;
   Buffer<Vec3> x_, v_, a_, tmp3_;
-  Buffer<Real> rho_, p_, alpha_, kappa_, tmpr_;
-  Buffer<int> nb_;
+  Buffer<Real> rho_, p_, alpha_, kappa_, ksum_, tmpr_;
+  Buffer<Real> warm_div_, warm_dens_;  // DFSPH warm starts, follow the particles
+  Buffer<int> nb_, full_;
   Buffer<std::uint32_t> id_, tmpu_, keys_, perm_, start_;
   Buffer<Vec3> bx_;
-  Buffer<Real> bpsi_;
+  Buffer<Real> bpsi_, brest_, bpw_, brho_, balpha_, bkappa_, bksum_, bwarm_div_, bwarm_dens_;
+  Buffer<int> bnb_rest_, bfull_;
+  int active_walls_ = 0;  // wall samples with fluid in reach (DFSPH)
   Buffer<std::uint32_t> bstart_;
   std::vector<Buffer<Vec3>> discs_;
   std::vector<double> travelled_;
   std::uint32_t next_id_ = 0;
   bool capacity_warned_ = false;
   Profile prof_;
+  static constexpr int kMinSweeps = 2;
 };
 
 }  // namespace sphfem

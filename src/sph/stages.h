@@ -4,7 +4,8 @@
 //
 // WCSPH: Becker & Teschner 2007 with the paper's state equation p = k (rho/rho0 - 1), p >= 0.
 // DFSPH: Bender & Koschier 2015/2017 (divergence-free and constant-density solvers).
-// Boundaries: static samples with mass psi (Akinci et al. 2012).
+// Boundaries: static samples with mass psi (Akinci et al. 2012). WCSPH gives them a pressure
+// each step (Adami, Hu & Adams 2012); DFSPH solves for their stiffness with the fluid's.
 #pragma once
 
 #include <cstdint>
@@ -20,23 +21,45 @@ struct FluidView {
   Vec3* v = nullptr;
   Vec3* a = nullptr;
   Real* rho = nullptr;
-  Real* p = nullptr;      // WCSPH pressure
-  Real* alpha = nullptr;  // DFSPH factor 1 / (|sum V grad W|^2 + sum |V grad W|^2)
-  Real* kappa = nullptr;  // DFSPH stiffness of the current solve
-  int* nb = nullptr;      // fluid neighbour count
+  Real* p = nullptr;          // pressure: WCSPH state equation, DFSPH rho^2 / rho0 sum kappa
+  Real* alpha = nullptr;      // DFSPH factor 1 / (|sum V grad W|^2 + sum |V grad W|^2)
+  Real* kappa = nullptr;      // DFSPH stiffness of the current Jacobi sweep
+  Real* kappa_sum = nullptr;  // DFSPH stiffness summed over the current solve
+  Real* warm_div = nullptr;   // DFSPH warm start of the divergence solve (dfsph_remember)
+  Real* warm_dens = nullptr;  // the same for the density solve
+  int* nb = nullptr;          // fluid neighbour count
+  int* full = nullptr;        // DFSPH: fluid and wall samples nearly fill the support
+  Vec3* gwall = nullptr;      // DFSPH: sum_b V grad W_ib (density), read by wall_density
   std::uint32_t* id = nullptr;
 };
 
+// Static wall samples.
 struct BoundaryView {
+  int n = 0;
   const Vec3* x = nullptr;
   const Real* psi = nullptr;
+  const Real* rest = nullptr;    // density of the walls alone at the sample (wall_rest)
+  const int* nb_rest = nullptr;  // wall samples in reach of the sample, itself included
+  Real* pw = nullptr;            // WCSPH: p_b / rho_b^2 (wall_pressure), 0 away from fluid
+  Real* rho = nullptr;           // DFSPH: rest + m sum_f W_bf
+  Real* alpha = nullptr;         // DFSPH: inverse diagonal (wall_density), 0 without fluid
+  int* full = nullptr;           // DFSPH: fluid and wall samples nearly fill the support
+  Real* kappa = nullptr;         // DFSPH stiffness of the current sweep
+  Real* kappa_sum = nullptr;     // DFSPH stiffness summed over the current solve
+  Real* warm_div = nullptr;      // DFSPH warm starts (wall_density)
+  Real* warm_dens = nullptr;
   GridView grid;
 };
 
+// Neighbours, fluid and wall, of a particle inside the fluid: two thirds of a full lattice
+// neighbourhood (the free-surface test of Bender & Koschier's divergence solve). Wall samples
+// count, or particles along a wall edge (12 fluid neighbours) would count as free surface.
+SPHFEM_HD int full_neighborhood(const SphParams& P) { return (P.full_neighbors * 2) / 3; }
+
 // Cell of every particle, and the identity permutation for the sort.
 template <class Exec>
-void cell_keys(Exec& ex, const GridView g, const Vec3* x, std::uint32_t* keys,
-               std::uint32_t* perm, int n) {
+void cell_keys(Exec& ex, const GridView g, const Vec3* x, std::uint32_t* keys, std::uint32_t* perm,
+               int n) {
   parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) {
     keys[i] = g.cell(x[i]);
     perm[i] = std::uint32_t(i);
@@ -70,8 +93,8 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const B
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
     Real sum = 0, grad2 = 0;
-    Vec3 gsum, gwall;
-    int count = 0;
+    Vec3 gsum, gwall, gwall_v;
+    int count = 0, walls = 0;
     for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t, const Vec3& r, Real r2) {
       const Real rr = std::sqrt(r2);
       sum += P.kernel.W(rr);
@@ -86,7 +109,12 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const B
     for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
       const Real rr = std::sqrt(r2);
       rho += b.psi[j] * P.kernel.W(rr);
-      if (with_alpha) gwall += P.kernel.grad(r, rr) * (b.psi[j] / P.rho0);
+      ++walls;
+      if (with_alpha) {
+        const Vec3 gw = P.kernel.grad(r, rr);
+        gwall += gw * (b.psi[j] / P.rho0);
+        gwall_v += gw * P.volume;
+      }
     });
     f.rho[i] = rho;
     f.nb[i] = count;
@@ -94,20 +122,27 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const B
       const Real p = P.stiffness * (rho / P.rho0 - Real(1));
       f.p[i] = p > Real(0) ? p : Real(0);
     } else {
-      // The wall mirrors kappa_i (dfsph_apply), so it moves i by twice its gradient sum.
-      const Real s = dot(gsum + gwall, gsum + gwall * Real(2)) + grad2;
+      // Diagonal of the pressure system: kappa_i moves i by -dt (gsum + gwall) kappa_i and each
+      // fluid neighbour j by dt V grad W_ij kappa_i; the walls carry their own stiffness.
+      const Real s = norm2(gsum + gwall) + grad2;
       f.alpha[i] = s > Real(1e-6) ? Real(1) / s : Real(0);
+      f.full[i] = count + walls >= full_neighborhood(P) ? 1 : 0;
+      f.gwall[i] = gwall_v;
     }
   });
 }
 
 // Accelerations: gravity, viscosity (Morris et al. 1997 Laplacian, Monaghan 1992 artificial
 // viscosity, XSPH as a velocity-smoothing force) and, for WCSPH, the symmetric pressure force.
-// The wall term is Akinci et al. 2012 eq. 10 (p_i / rho_i^2 only): mirroring the pressure as
-// well doubled it and fed energy into hydrostatic tanks until they blew up.
+// Walls are no-slip: the viscous term of a fluid pair, with the wall at rest, acting on the
+// velocity across the pair direction only (along it the pressure answers); with free-slip
+// walls more pressure noise stayed in a settled tank. WCSPH walls push as
+// particles of pressure p_b (wall_pressure): psi_b (p_i / rho_i^2 + p_b / rho_b^2) grad W.
+// Akinci et al. 2012 eq. 10 alone (p_i / rho_i^2) is too weak for the frozen-lattice walls:
+// particles sank into them and the bottom pressure doubled.
 template <class Exec>
-void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g,
-                   const BoundaryView b, bool with_pressure, Real dt) {
+void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, const BoundaryView b,
+                   bool with_pressure, Real dt) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i], vi = f.v[i];
     const Real rhoi = f.rho[i];
@@ -133,13 +168,41 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g,
       acc += gw * s;
       if (P.xsph > Real(0)) acc -= vij * (P.xsph * inv_dt * (P.mass / rhoj) * P.kernel.W(rr));
     });
-    if (with_pressure) {
-        for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-        const Real rr = std::sqrt(r2);
-        acc -= P.kernel.grad(r, rr) * (b.psi[j] * pi_rho2);
-      });
-    }
+    for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+      if (r2 <= Real(0)) return;
+      const Vec3 gw = P.kernel.grad(r, std::sqrt(r2));
+      const Real vol = b.psi[j] / P.rho0;
+      const Vec3 across = vi - r * (dot(vi, r) / r2);
+      acc += across * (Real(2) * P.viscosity * vol * dot(r, gw) / (r2 + eps2));
+      if (with_pressure) acc -= gw * (b.psi[j] * (pi_rho2 + b.pw[j]));
+    });
     f.a[i] = acc;
+  });
+}
+
+// WCSPH wall pressure (Adami, Hu & Adams 2012, eqs. 27-28): every sample with fluid in reach
+// takes the Shepard average of the fluid pressure plus the hydrostatic head between fluid and
+// sample, p_b = (sum_f p_f W_bf + g . sum_f rho_f (x_b - x_f) W_bf) / sum_f W_bf, and the
+// density of the inverse state equation; samples without fluid only look up empty cells.
+// Mirroring p_i onto the wall instead (alone or with the head in pair form) is not an
+// interaction between particles with their own pressure: it fed energy into a resting tank.
+template <class Exec>
+void wall_pressure(Exec& ex, const SphParams P, const FluidView f, const GridView g,
+                   BoundaryView b) {
+  parallel_for(ex, b.n, [=] SPHFEM_LAMBDA(int k) {
+    const Vec3 xb = b.x[k];
+    Real sw = 0, sp = 0;
+    Vec3 srw;
+    for_neighbors(g, f.x, xb, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+      const Real w = P.kernel.W(std::sqrt(r2));
+      sw += w;
+      sp += f.p[j] * w;
+      srw += r * (f.rho[j] * w);
+    });
+    Real pb = sw > Real(0) ? (sp + dot(P.gravity, srw)) / sw : Real(0);
+    if (pb < Real(0)) pb = Real(0);
+    const Real rhob = P.rho0 * (Real(1) + pb / P.stiffness);
+    b.pw[k] = pb / (rhob * rhob);
   });
 }
 
@@ -183,12 +246,44 @@ int drift(Exec& ex, const SphParams P, FluidView f, Real dt) {
   return int(clamped + 0.5);
 }
 
-// DFSPH source: predicted relative density (density solve) or its rate (divergence solve),
-// then kappa = source * alpha / dt^2 (or / dt). Returns the sum of the errors.
+// Relaxation of the DFSPH Jacobi sweeps. With the exact diagonal (omega = 1) a sweep
+// over-shoots: on the lattice the largest eigenvalue of D^-1 A is 2.8 for the cubic spline and
+// 2.6 for Wendland C2 at h = 2d (a mode of wavelength 6d along the diagonal), so omega = 1
+// diverges; summing only positive corrections hid that as extra pressure, and the overshoot
+// kept a resting tank moving. 0.5 damps every mode, as the relaxed Jacobi of IISPH (Ihmsen et
+// al. 2014, eq. 16).
+constexpr Real kDfsphOmega = Real(0.5);
+
+// Warm starts are running means over about 1 / kDfsphMemory steps of the stiffness summed per
+// solve. The last step's sum alone also holds that step's correction of its density error;
+// started from it, every step pushed the particles a second time and a resting tank kept
+// boiling (rms speed 0.1 m/s). The divergence solve has no such part and keeps its last sum.
+constexpr Real kDfsphMemory = Real(0.05);
+constexpr Real kDfsphWarmSmoothing = Real(0.3);  // per step, dfsph_smooth_warm
+
+// One projected, relaxed Jacobi update (Bender & Koschier 2017, eqs. 9 and 12, with omega).
+// The pressure may only push: kappa_sum + kappa >= 0, compression where kappa_sum > 0 must
+// vanish and expansion is free where kappa_sum = 0 (a complementarity problem); the
+// projection also lets a sweep take back pressure the warm start over-estimated. Returns the
+// complementarity residual in relative density: the compression, or the expansion that taking
+// back the remaining pressure could still undo.
+SPHFEM_HD Real dfsph_update(Real err, Real alpha, Real kappa_sum, Real dt, Real& kappa) {
+  kappa = kDfsphOmega * err * alpha / (dt * dt);
+  if (kappa < -kappa_sum) kappa = -kappa_sum;
+  if (err >= Real(0) || alpha <= Real(0)) return err > Real(0) ? err : Real(0);
+  const Real releasable = kappa_sum * dt * dt / alpha;
+  return -err < releasable ? -err : releasable;
+}
+
+// DFSPH residual of every fluid particle and its stiffness update: the predicted relative
+// density (density solve, eq. 9) or its change over the step (divergence solve, eq. 13;
+// compression only counts where the neighbourhood is nearly full, at the free surface
+// particles may close up). The density error of the step's start is corrected at the pace of
+// a full step (pos_rate = dt / CFL step): a short step that lands on an output time would
+// otherwise turn it into a huge velocity. Returns the summed residual.
 template <class Exec>
 double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g,
-                    const BoundaryView b, Real dt, bool divergence) {
-  const int min_nb = (P.full_neighbors * 2) / 3;
+                    const BoundaryView b, Real dt, Real pos_rate, bool divergence) {
   return reduce_sum(ex, f.n, [=] SPHFEM_LAMBDA(int i) -> double {
     const Vec3 xi = f.x[i], vi = f.v[i];
     Real d = 0;
@@ -198,26 +293,155 @@ double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g,
     for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
       d += (b.psi[j] / P.rho0) * dot(vi, P.kernel.grad(r, std::sqrt(r2)));
     });
-    Real err, kappa;
-    if (divergence) {
-      // Only compression counts, and only where the neighbourhood is nearly full.
-      err = (d > Real(0) && f.nb[i] >= min_nb) ? d * dt : Real(0);
-      kappa = err * f.alpha[i] / (dt * dt);
-    } else {
-      Real rho_adv = f.rho[i] / P.rho0 + dt * d;
-      err = rho_adv > Real(1) ? rho_adv - Real(1) : Real(0);
-      kappa = err * f.alpha[i] / (dt * dt);
-    }
-    f.kappa[i] = kappa;
-    return double(err);
+    Real err = divergence ? d * dt : (f.rho[i] / P.rho0 - Real(1)) * pos_rate + dt * d;
+    if (divergence && !f.full[i] && err > Real(0)) err = Real(0);
+    return double(dfsph_update(err, f.alpha[i], f.kappa_sum[i], dt, f.kappa[i]));
   });
 }
 
-// v_i -= dt (sum_j V_j (kappa_i + kappa_j) grad W_ij + sum_b psi_b/rho0 kappa_i grad W_ib).
-// Both solves also sum the pressure p_i = rho_i^2 / rho0 * kappa_i (gauges, output).
+// Wall samples as pressure carriers of the same solve, as the wall particles in the pressure
+// Poisson equation of Shao & Lo 2003: a sample's density rest + m sum_f W_bf may not exceed
+// rho0, and its stiffness pushes the fluid by V kappa_b grad W. With the fluid's own wall term
+// psi_b / rho0 kappa_i grad W the pair force is V (kappa_i + kappa_b) grad W on the lattice: the
+// wall pressure continues the fluid's, hydrostatic head included, and the velocity update is
+// the transpose of the density change, an orthogonal projection that cannot add kinetic
+// energy. Mirroring kappa_i onto the walls instead (kappa_b = kappa_i) is no projection: it
+// fed energy into a resting tank until it blew up.
 template <class Exec>
-void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, const BoundaryView b,
-                 Real dt, bool sum_pressure) {
+double wall_source(Exec& ex, const SphParams P, const FluidView f, const GridView g, BoundaryView b,
+                   Real dt, Real pos_rate, bool divergence) {
+  return reduce_sum(ex, b.n, [=] SPHFEM_LAMBDA(int k) -> double {
+    const Real alpha = b.alpha[k];
+    if (alpha <= Real(0)) {
+      b.kappa[k] = Real(0);
+      return 0.0;
+    }
+    Real d = 0;
+    for_neighbors(g, f.x, b.x[k], P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+      d -= P.volume * dot(f.v[j], P.kernel.grad(r, std::sqrt(r2)));
+    });
+    Real err = divergence ? d * dt : (b.rho[k] / P.rho0 - Real(1)) * pos_rate + dt * d;
+    if (divergence && !b.full[k] && err > Real(0)) err = Real(0);
+    return double(dfsph_update(err, alpha, b.kappa_sum[k], dt, b.kappa[k]));
+  });
+}
+
+// Per step, for the wall samples with fluid in reach (the others only look up their empty
+// cells): density, diagonal, free-surface flag and warm starts. The diagonal is the larger of
+// sum_f |V grad W_bf|^2 and what all samples around the same particles do together, the sum
+// over f of V grad W_bf . sum_b' V grad W_b'f: the samples around a particle all push it the
+// same way, and with the exact diagonal a lone particle in a corner was pushed by each of them
+// as if it were the only one (the Jacobi sweep blew up). The warm starts are the Shepard
+// average of the fluid's, plus the hydrostatic head g . (x_b - x_f) for the density solve
+// (Adami et al. 2012, eq. 27): a sample keeps no stiffness of its own, as the fluid in front of
+// it changes. Returns how many samples take part.
+template <class Exec>
+int wall_density(Exec& ex, const SphParams P, const FluidView f, const GridView g, BoundaryView b) {
+  const double active = reduce_sum(ex, b.n, [=] SPHFEM_LAMBDA(int k) -> double {
+    const Vec3 xb = b.x[k];
+    Real sum = 0, grad2 = 0, shared = 0, kdiv = 0, kdens = 0;
+    Vec3 srw;
+    int count = 0;
+    for_neighbors(g, f.x, xb, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+      const Real rr = std::sqrt(r2);
+      const Vec3 gw = P.kernel.grad(r, rr) * P.volume;
+      const Real w = P.kernel.W(rr);
+      sum += w;
+      grad2 += norm2(gw);
+      shared -= dot(gw, f.gwall[j]);
+      kdiv += f.warm_div[j] * w;
+      kdens += f.warm_dens[j] * w;
+      srw += r * w;
+      ++count;
+    });
+    b.rho[k] = b.rest[k] + P.mass * sum;
+    b.full[k] = b.nb_rest[k] + count >= full_neighborhood(P) ? 1 : 0;
+    const Real diag = shared > grad2 ? shared : grad2;
+    b.alpha[k] = grad2 > Real(1e-6) ? Real(1) / diag : Real(0);
+    Real wdiv = 0, wdens = 0;
+    if (count > 0) {
+      wdiv = kdiv / sum;
+      wdens = (kdens + dot(P.gravity, srw)) / sum;
+    }
+    b.warm_div[k] = wdiv > Real(0) ? wdiv : Real(0);
+    b.warm_dens[k] = wdens > Real(0) ? wdens : Real(0);
+    return count > 0 ? 1.0 : 0.0;
+  });
+  return int(active + 0.5);
+}
+
+// Partial Shepard filter of the density solve's warm start, fluid and wall samples together:
+// warm_i += kDfsphWarmSmoothing (sum_j warm_j W_ij / sum_j W_ij - warm_i), into out. The sweeps
+// cannot see a stiffness that alternates layer by layer (on the lattice its SPH gradient
+// vanishes), so once in the warm start it stayed there and showed as a static +-5 % zigzag in
+// the pressure; the filter lets it decay while the smooth hydrostatic part passes unchanged.
+template <class Exec>
+void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const GridView g,
+                       const BoundaryView b, Real* out) {
+  parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
+    const Vec3 xi = f.x[i];
+    Real sw = 0, sk = 0;
+    for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t j, const Vec3&, Real r2) {
+      const Real w = P.kernel.W(std::sqrt(r2));
+      sw += w;
+      sk += w * f.warm_dens[j];
+    });
+    for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3&, Real r2) {
+      const Real w = P.kernel.W(std::sqrt(r2));
+      sw += w;
+      sk += w * b.warm_dens[j];
+    });
+    const Real own = f.warm_dens[i];
+    out[i] = own + kDfsphWarmSmoothing * (sk / sw - own);
+  });
+}
+
+// Density of the walls alone at each sample and the samples in reach; once, they do not move.
+template <class Exec>
+void wall_rest(Exec& ex, const SphParams P, Real* rest, int* nb_rest, const BoundaryView b) {
+  parallel_for(ex, b.n, [=] SPHFEM_LAMBDA(int k) {
+    Real sum = 0;
+    int count = 0;
+    for_neighbors(b.grid, b.x, b.x[k], P.h2, [&](std::uint32_t j, const Vec3&, Real r2) {
+      sum += b.psi[j] * P.kernel.W(std::sqrt(r2));
+      ++count;
+    });
+    rest[k] = sum;
+    nb_rest[k] = count;
+  });
+}
+
+// Warm start (Bender & Koschier 2017, sec. 4.3): the remembered stiffness is the first sweep.
+// kappa has units of pressure / density (an acceleration potential), so it carries over
+// unchanged when dt changes.
+template <class Exec>
+void dfsph_warm_start(Exec& ex, FluidView f, const BoundaryView b, bool divergence) {
+  parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
+    f.kappa[i] = divergence ? f.warm_div[i] : f.warm_dens[i];
+    f.kappa_sum[i] = Real(0);
+  });
+  parallel_for(ex, b.n, [=] SPHFEM_LAMBDA(int k) {
+    b.kappa[k] = divergence ? b.warm_div[k] : b.warm_dens[k];
+    b.kappa_sum[k] = Real(0);
+  });
+}
+
+// After a solve: warm += weight (kappa_sum - warm). The weight is scaled by dt / CFL step, so
+// a short step, whose corrections are impulses of size ~ 1 / dt, hardly moves the memory.
+template <class Exec>
+void dfsph_remember(Exec& ex, FluidView f, Real weight, bool divergence) {
+  parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
+    Real* warm = divergence ? f.warm_div : f.warm_dens;
+    warm[i] += weight * (f.kappa_sum[i] - warm[i]);
+  });
+}
+
+// v_i -= dt (sum_j V (kappa_i + kappa_j) grad W_ij + sum_b (psi_b / rho0 kappa_i +
+// V kappa_b) grad W_ib); the sweep's stiffness joins the sums, and the fluid's the pressure
+// p_i = rho_i^2 / rho0 kappa_i (gauges, output).
+template <class Exec>
+void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, BoundaryView b,
+                 Real dt) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
     const Real ki = f.kappa[i];
@@ -226,16 +450,18 @@ void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, con
       const Real k = ki + f.kappa[j];
       if (k != Real(0)) dv += P.kernel.grad(r, std::sqrt(r2)) * (P.volume * k);
     });
-    if (ki != Real(0))
-      for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-        dv += P.kernel.grad(r, std::sqrt(r2)) * ((b.psi[j] / P.rho0) * Real(2) * ki);
-      });
+    for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+      const Real k = (b.psi[j] / P.rho0) * ki + P.volume * b.kappa[j];
+      if (k != Real(0)) dv += P.kernel.grad(r, std::sqrt(r2)) * k;
+    });
     f.v[i] -= dv * dt;
-    if (sum_pressure) f.p[i] += ki * f.rho[i] * f.rho[i] / P.rho0;
+    f.kappa_sum[i] += ki;
+    f.p[i] += ki * f.rho[i] * f.rho[i] / P.rho0;
   });
+  parallel_for(ex, b.n, [=] SPHFEM_LAMBDA(int k) { b.kappa_sum[k] += b.kappa[k]; });
 }
 
-// Appends one emitter layer at slots [first, first + count).
+// Appends one emitter layer at slots [first, first + count), at rest in the solver's memory.
 template <class Exec>
 void emit_layer(Exec& ex, FluidView f, const Vec3* disc, int count, int first, Vec3 origin,
                 Vec3 velocity, std::uint32_t first_id) {
@@ -244,6 +470,9 @@ void emit_layer(Exec& ex, FluidView f, const Vec3* disc, int count, int first, V
     f.x[i] = origin + disc[k];
     f.v[i] = velocity;
     f.id[i] = first_id + std::uint32_t(k);
+    f.p[i] = Real(0);
+    f.warm_div[i] = Real(0);
+    f.warm_dens[i] = Real(0);
   });
 }
 

@@ -19,7 +19,7 @@ namespace sphfem {
 struct Material {
   double density = 1000.0;  // kg/m^3
   double young = 1e5;       // Pa, Young's modulus E
-  double poisson = 0.3;     // Poisson's ratio, 0 <= nu < 0.5
+  double poisson = 0.3;     // Poisson's ratio, -1 < nu < 0.5
   double alpha = 0.0;       // 1/s, Rayleigh damping D = alpha M + beta K
   double beta = 0.0;        // s
 };

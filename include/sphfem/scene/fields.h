@@ -16,7 +16,17 @@
 
 namespace sphfem::scene {
 
-enum class FieldType { Number, Integer, Bool, String, Enum, Vec3, Object, ObjectArray };
+enum class FieldType {
+  Number,
+  Integer,
+  IntegerList,
+  Bool,
+  String,
+  Enum,
+  Vec3,
+  Object,
+  ObjectArray
+};
 
 // One end of a numeric range.
 struct Bound {
@@ -58,7 +68,7 @@ struct Field {
   std::string key;
   FieldType type = FieldType::Number;
   std::string unit;                    // SI unit; "-" when dimensionless, "" for non-numbers
-  Range range;                         // Number and Integer
+  Range range;                         // Number, Integer and each IntegerList element
   std::vector<std::string> choices;    // Enum: names in enumerator order
   std::string constraint;              // rule beyond the type and range, e.g. "non-zero"
   std::string description;             // one sentence
@@ -98,6 +108,8 @@ SceneSpec example_scene();
 
 // Cross-field limits, shared by validate_scene and the docs that describe it.
 inline constexpr double kMinDomainSpacings = 4.0;  // domain width in particle spacings, per axis
+inline constexpr double kMinTetgenQuality = 1.1;   // TetGen may not finish below this ratio
+inline constexpr long kMaxBodyTets = 5000000;      // tetrahedra per generated body
 
 // Shortest text that reads back as the same double: 0.4, 1e-06, 1000.
 std::string format_number(double v);

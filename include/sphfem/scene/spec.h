@@ -1,11 +1,14 @@
 // What a scene file says, in SI units, after loading and validation.
-// JSON -> SceneSpec (this file) -> compiled fluid model (sph/model.h) -> state.
+// JSON -> SceneSpec (this file) -> compiled fluid model (sph/model.h) and bodies model
+// (scene/bodies.h) -> state.
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "sphfem/core/vec.h"
+#include "sphfem/fem/model.h"
+#include "sphfem/fem/tetrahedralize.h"
 
 namespace sphfem {
 
@@ -64,12 +67,57 @@ struct OutputSpec {
   bool ply = false;         // binary PLY point frames (Houdini, MeshLab)
 };
 
-enum class GaugeKind { Pressure, Height };
+enum class GaugeKind { Pressure, Height, Node };
 
 struct GaugeSpec {
   std::string name;
   GaugeKind kind = GaugeKind::Pressure;
-  Vec3d position;  // m; for Height only x and z are used
+  Vec3d position;    // m; for Height only x and z are used; Node: nearest rest node
+  std::string body;  // Node: the body whose node is followed
+};
+
+enum class BodyShape { Box, Tube, Cup, Sphere, Cloth, Mesh };
+
+struct PinBoxSpec {
+  Vec3d lo, hi;  // m, nodes whose rest position lies in this box are held fixed
+};
+
+struct PinSpec {
+  std::vector<PinBoxSpec> boxes;
+  std::vector<int> nodes;  // node indices of the body's mesh, from 0
+};
+
+// One deformable body: a generated shape or a mesh file, its material and fixings.
+struct BodySpec {
+  std::string name;
+  BodyShape shape = BodyShape::Box;
+  Vec3d position;               // m: centre (box, sphere, cloth) or centre of the base (tube, cup)
+  Vec3d size{0.1, 0.1, 0.1};    // m: box edges; cloth extents along x and z
+  double radius = 0.05;         // m: sphere; outer radius of tube and cup
+  double inner_radius = 0.04;   // m: tube and cup
+  double length = 0.2;          // m: tube, along +y
+  double height = 0.1;          // m: cup, along +y
+  double thickness = 0.01;      // m: cloth (along y); cup bottom
+  int resolution = 8;           // cells across the largest extent
+  std::string file;             // mesh: relative to the scene file's folder
+  double scale = 1.0;           // mesh: x -> scale x + offset
+  Vec3d offset;                 // m, mesh
+  double max_volume = TetgenOptions{}.max_volume;  // m^3, surface meshes: TetGen "a"
+  double quality = TetgenOptions{}.quality;        // surface meshes: TetGen "q"
+  Material material;
+  Vec3d velocity;               // m/s, initial velocity of the free nodes
+  PinSpec pinned;
+  double restitution = 0.0;     // fluid contact, normal: kept for the coupling
+  double slip = 1.0;            // fluid contact, tangential: kept for the coupling
+};
+
+// Settings of the FEM solve shared by all bodies; defaults are the solver's own.
+struct FemSpec {
+  double cg_tolerance = FemSettings{}.cg_tolerance;
+  int cg_max_iterations = FemSettings{}.cg_max_iterations;
+  int newton_iterations = FemSettings{}.newton_iterations;
+  int rotation_iterations = FemSettings{}.rotation_iterations;
+  double friction = FemSettings{}.friction;  // Coulomb, nodes sliding on the tank walls
 };
 
 struct SceneSpec {
@@ -80,6 +128,10 @@ struct SceneSpec {
   DomainSpec domain;
   OutputSpec output;
   std::vector<GaugeSpec> gauges;
+  std::vector<BodySpec> bodies;
+  FemSpec fem;
+
+  bool has_fluid() const { return !fluid.blocks.empty() || !fluid.emitters.empty(); }
 };
 
 }  // namespace sphfem

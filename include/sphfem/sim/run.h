@@ -1,4 +1,5 @@
-// Running a scene: the solver, frame files, gauges.csv and progress, as `sphfem run` does.
+// Running a scene: the fluid and body solvers, frame files, gauges.csv and progress, as
+// `sphfem run` does.
 #pragma once
 
 #include <functional>
@@ -22,12 +23,13 @@ struct RunSummary {
   long steps = 0;
   int frames = 0;
   int particles = 0;
+  int bodies = 0, body_nodes = 0;
   double sim_seconds = 0;
   double wall_seconds = 0;
 };
 
 // Throws SceneError/std::runtime_error before writing anything when the scene cannot run,
-// and SimulationError when the run blows up (every frame already written is kept).
+// and SimulationError when the fluid or a body blows up (every frame already written is kept).
 RunSummary run_scene(const SceneSpec& scene, const RunOptions& options);
 
 }  // namespace sphfem

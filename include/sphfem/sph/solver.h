@@ -32,8 +32,10 @@ struct StepInfo {
   double dt = 0;
   int pressure_iterations = 0;
   int divergence_iterations = 0;
-  double density_error = 0;  // mean relative compression after the pressure solve (DFSPH)
-  int clamped = 0;           // particles the last-resort box had to stop this step
+  // DFSPH: mean residual of the density solve over fluid and wall samples: relative
+  // compression, or expansion a particle's remaining pressure still holds open.
+  double density_error = 0;
+  int clamped = 0;  // particles the last-resort box had to stop this step
   int emitted = 0;
 };
 

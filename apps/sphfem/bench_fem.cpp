@@ -1,0 +1,206 @@
+// `sphfem bench --fem`: FEM time per step for bodies at the tetrahedron counts of the paper's
+// Table 1 (generated spheres, and the Stanford bunny tetrahedralised by TetGen), printed
+// beside the paper's GPU times.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "bench.h"
+#include "sphfem/fem/import.h"
+#include "sphfem/fem/solver.h"
+#include "sphfem/fem/tetrahedralize.h"
+#include "sphfem/io/atomic_file.h"
+
+namespace {
+
+using namespace sphfem;
+
+// Table 1 of the reference paper: FEM milliseconds per step on its GPU, by body size.
+struct PaperRow {
+  double tets;
+  double ms;
+};
+constexpr PaperRow kPaper[] = {
+    {1.9e3, 11.5}, {2.1e3, 11.9}, {6.4e3, 12.0}, {22.0e3, 25.6}, {34.2e3, 36.4}};
+
+const PaperRow& nearest_paper_row(long tets) {
+  const PaperRow* best = &kPaper[0];
+  for (const PaperRow& r : kPaper)
+    if (std::fabs(std::log(r.tets / tets)) < std::fabs(std::log(best->tets / tets))) best = &r;
+  return *best;
+}
+
+constexpr double kDt = 1e-3;                 // s, a typical fluid step, which the bodies share
+constexpr int kWarmUp = 10;                  // steps before measuring: caches, CG warm starts
+constexpr double kBodySize = 0.2;            // m, diameter of the spheres and height of the bunny
+const int kSphereCells[] = {7, 10, 15, 18};  // 2058, 6000, 20250, 34992 tetrahedra
+const long kBunnyTargets[] = {6000, 22000, 34000};  // tetrahedra
+
+struct Case {
+  std::string body;
+  TetMesh mesh;
+  std::string how;  // how the mesh was made
+};
+
+struct Result {
+  std::string body, how;
+  long tets = 0, nodes = 0;
+  double ms = 0, cg = 0;
+  BodyProfile prof;
+};
+
+// The bunny at about `target` tetrahedra. TetGen has no count option: the coarsest mesh
+// (no quality refinement, no volume bound) is tried first, then quality 2, then a bisection
+// of the volume bound on a log scale until the count is within 5 %.
+TetMesh mesh_near(const SurfaceMesh& s, long target, std::string& switches) {
+  auto off = [&](const TetMesh& m) {
+    return std::fabs(double(m.tets.size()) - double(target)) / double(target);
+  };
+  TetgenOptions best_o;
+  best_o.quality = 0;
+  TetMesh best = tetrahedralize(s, best_o);
+  auto consider = [&](const TetgenOptions& o, TetMesh m) {
+    if (off(m) < off(best)) best = std::move(m), best_o = o;
+  };
+  if (off(best) > 0.1 && long(best.tets.size()) < target) {
+    TetgenOptions o;
+    o.quality = 2.0;
+    TetMesh m = tetrahedralize(s, o);
+    const bool too_few = long(m.tets.size()) < target;
+    consider(o, std::move(m));
+    if (off(best) > 0.05) {
+      o.quality = too_few ? 2.0 : 0.0;
+      const double volume = enclosed_volume(s.x, s.tris);
+      double fine = 0.1 * volume / double(target), coarse = 10.0 * volume / double(target);
+      for (int it = 0; it < 12 && off(best) > 0.05; ++it) {
+        o.max_volume = std::sqrt(fine * coarse);
+        m = tetrahedralize(s, o);
+        (long(m.tets.size()) > target ? fine : coarse) = o.max_volume;
+        consider(o, std::move(m));
+      }
+    }
+  }
+  switches = tetgen_switches(best_o);
+  return best;
+}
+
+Result run_case(const Case& c, Backend backend, int steps) {
+  Material mat;  // soft rubber: density 1000 kg/m^3, E 100 kPa, nu 0.3
+  mat.density = 1000.0, mat.young = 1e5, mat.poisson = 0.3;
+  // The bottom 5 % pinned: gravity keeps the body deforming, so CG has real work each step.
+  const auto [lo, hi] = bounds(c.mesh.x);
+  const double cut = lo.y + 0.05 * (hi.y - lo.y);
+  const auto pinned = pin_nodes(c.mesh, [&](const Vec3d& x) { return x.y <= cut; });
+  const FemSettings set;  // the solver's defaults, as a scene without a `fem` section gets
+  auto solver =
+      make_body_solver(compile_bodies({compile_body(c.mesh, mat, pinned, c.body)}, set), backend);
+  for (int i = 0; i < kWarmUp; ++i) solver->step(kDt);
+  solver->reset_profile();
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < steps; ++i) solver->step(kDt);
+  Result r;
+  r.body = c.body;
+  r.how = c.how;
+  r.tets = long(c.mesh.tets.size());
+  r.nodes = long(c.mesh.x.size());
+  r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
+         steps;
+  r.prof = solver->profile();
+  r.cg = double(r.prof.cg_iterations) / double(std::max(1L, r.prof.steps));
+  return r;
+}
+
+// The surface to tetrahedralise, scaled to kBodySize tall and standing on y = 0; an empty
+// surface when the default bunny has not been fetched.
+SurfaceMesh bunny_surface(const BenchOptions& opt) {
+  const std::string path = opt.mesh.empty() ? "build/assets/bunny.obj" : opt.mesh;
+  if (opt.mesh.empty() && !std::filesystem::exists(path)) {
+    std::printf(
+        "bunny: %s not found, so only spheres are measured; fetch it with "
+        "scripts/fetch-bunny.sh build/assets, or pass --mesh PATH\n",
+        path.c_str());
+    return {};
+  }
+  SurfaceMesh s = load_surface(path);
+  const auto [lo, hi] = bounds(s.x);
+  const double scale = kBodySize / (hi.y - lo.y);
+  const Vec3d centre = (lo + hi) * 0.5;
+  transform(s, scale, Vec3d(-centre.x * scale, -lo.y * scale, -centre.z * scale));
+  return s;
+}
+
+std::string thousands(long n) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1fk", n / 1000.0);
+  return buf;
+}
+
+}  // namespace
+
+int run_fem_bench(const BenchOptions& opt) {
+  if (opt.threads > 0) set_cpu_threads(opt.threads);
+  const Backend backend = opt.backend == "cuda" ? Backend::Cuda : Backend::Cpu;
+  const std::string device = backend == Backend::Cpu ? cpu_model() : "CUDA device";
+
+  std::vector<Case> cases;
+  for (int cells : kSphereCells)
+    cases.push_back({"sphere", make_sphere(Vec3d(0, 0, 0), 0.5 * kBodySize, cells),
+                     "make_sphere, " + std::to_string(cells) + " cells across"});
+  const SurfaceMesh bunny = bunny_surface(opt);
+  if (!bunny.tris.empty()) {
+    const std::string name = std::filesystem::path(opt.mesh.empty() ? "bunny" : opt.mesh).stem();
+    for (long target : kBunnyTargets) {
+      std::string switches;
+      TetMesh m = mesh_near(bunny, target, switches);
+      cases.push_back({name, std::move(m), "TetGen -" + switches});
+    }
+  }
+  std::sort(cases.begin(), cases.end(),
+            [](const Case& a, const Case& b) { return a.mesh.tets.size() < b.mesh.tets.size(); });
+
+  std::printf(
+      "FEM benchmark on %s, %d threads, %s backend: implicit Euler, dt %g ms, E 100 kPa, "
+      "bottom 5 %% pinned, %d steps after %d warm-up\n\n",
+      device.c_str(), cpu_threads(), opt.backend.c_str(), kDt * 1e3, opt.steps, kWarmUp);
+  std::printf("%-8s %7s %7s %9s %8s   %-22s %s\n", "body", "tets", "nodes", "ms/step", "CG it",
+              "paper GPU (Table 1)", "mesh");
+  char line[1024];
+  std::string csv;
+  std::time_t now = std::time(nullptr);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
+  for (const Case& c : cases) {
+    const Result r = run_case(c, backend, opt.steps);
+    const PaperRow& p = nearest_paper_row(r.tets);
+    char paper[64];
+    std::snprintf(paper, sizeof paper, "%s tets %5.1f ms", thousands(long(p.tets)).c_str(), p.ms);
+    std::printf("%-8s %7ld %7ld %9.2f %8.1f   %-22s %s\n", r.body.c_str(), r.tets, r.nodes, r.ms,
+                r.cg, paper, r.how.c_str());
+    std::fflush(stdout);
+    const double per = 1.0 / double(std::max(1L, r.prof.steps));
+    std::snprintf(line, sizeof line,
+                  "%s,\"%s\",%d,%s,%s,%ld,%ld,%d,%g,%.3f,%.3f,%.3f,%.3f,%.3f,%.1f,%.0f,%.1f\n",
+                  date, device.c_str(), cpu_threads(), opt.backend.c_str(), r.body.c_str(), r.tets,
+                  r.nodes, opt.steps, kDt, r.prof.ms_rotations * per, r.prof.ms_assemble * per,
+                  r.prof.ms_solve * per, r.prof.ms_integrate * per, r.ms, r.cg, p.tets, p.ms);
+    csv += line;
+  }
+  if (!opt.out_dir.empty()) {
+    io::ensure_directory(opt.out_dir);
+    const std::string path = opt.out_dir + "/fem.csv";
+    const bool fresh = !std::filesystem::exists(path);
+    std::ofstream f(path, std::ios::app);
+    if (fresh)
+      f << "date,device,threads,backend,body,tets,nodes,steps,dt,ms_rotations,ms_assemble,"
+           "ms_solve,ms_integrate,ms_step,cg_iterations,paper_tets,paper_gpu_ms\n";
+    f << csv;
+    std::printf("\nresults appended to %s\n", path.c_str());
+  }
+  return 0;
+}
