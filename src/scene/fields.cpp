@@ -498,7 +498,7 @@ const ObjectTable& body_table() {
                   "fluid coupling; not used yet.")
           .number("slip", &BodySpec::slip, "-", kUnit,
                   "Fluid contact: share of the tangential relative velocity kept (1 free slip, 0 "
-                  "no slip). Kept for the fluid coupling; not used yet.")
+                  "no slip).")
           .finish([](BodySpec& b, std::size_t index) {
             if (b.name.empty()) b.name = "body" + std::to_string(index);
           })
@@ -528,6 +528,38 @@ const ObjectTable& fem_table() {
   return t;
 }
 
+const ObjectTable& coupling_table() {
+  static const ObjectTable t =
+      Table<CouplingSpec>("coupling",
+                          "How fluid and bodies push each other. Used when the scene has both "
+                          "fluid and bodies; the tank faces join the ray cast in any scene with "
+                          "fluid when `tank_rays` is on.")
+          .choice("method", &CouplingSpec::method, {"raytraced", "boundary_particles"},
+                  "`raytraced`: each particle's motion is ray-cast against the bodies' surface "
+                  "triangles and momentum is exchanged per face with the bodies' `restitution` "
+                  "and `slip`. `boundary_particles`: the baseline, samples on the body "
+                  "surfaces that move with them (Akinci et al. 2012).")
+          .number("skin", &CouplingSpec::skin, "-", Range().gt(0).lt(1),
+                  "Distance kept between a particle and a surface it hits, as a fraction of "
+                  "the particle radius.")
+          .boolean("near_surface_density", &CouplingSpec::near_surface_density,
+                   "Ray-traced coupling: add the kernel mass missing beyond a body's surface "
+                   "(from the distance to the closest point), and its pressure force, so fluid "
+                   "next to a body keeps its rest density.")
+          .boolean("tank_rays", &CouplingSpec::tank_rays,
+                   "Ray-cast the tank's six faces too, as static colliders of infinite mass, "
+                   "so no particle ever crosses a wall.")
+          .number("rebuild_quality", &CouplingSpec::rebuild_quality, "-", Range().gt(1),
+                  "Rebuild a body's BVH (instead of refitting it) when its total box area "
+                  "exceeds this multiple of the area right after the last build.")
+          .number("wall_restitution", &CouplingSpec::wall_restitution, "-", kUnit,
+                  "Restitution of the tank's faces when `tank_rays` is on.")
+          .number("wall_slip", &CouplingSpec::wall_slip, "-", kUnit,
+                  "Slip of the tank's faces when `tank_rays` is on.")
+          .build();
+  return t;
+}
+
 }  // namespace
 
 const ObjectTable& scene_table() {
@@ -540,6 +572,8 @@ const ObjectTable& scene_table() {
                   "Fluid material and sources; see `fluid`.")
           .array("bodies", &SceneSpec::bodies, body_table(), "Deformable bodies; see `bodies[]`.")
           .object("fem", &SceneSpec::fem, fem_table(), "Solver settings of the bodies; see `fem`.")
+          .object("coupling", &SceneSpec::coupling, coupling_table(),
+                  "Fluid-body momentum exchange; see `coupling`.")
           .object("domain", &SceneSpec::domain, domain_table(), "The tank; see `domain`.")
           .object("output", &SceneSpec::output, output_table(), "Frame output; see `output`.")
           .array("gauges", &SceneSpec::gauges, gauge_table(), "Probes; see `gauges[]`.")
@@ -589,6 +623,8 @@ SceneSpec example_scene() {
   s.fem.cg_tolerance = 1e-3;
   s.fem.cg_max_iterations = 200;
   s.fem.friction = 0.5;
+  s.coupling.method = CouplingMethod::RayTraced;
+  s.coupling.skin = 0.2;
   s.gauges.push_back({"p_bottom", GaugeKind::Pressure, Vec3d(0.1, 0.005, 0.05), ""});
   s.gauges.push_back({"h_wall", GaugeKind::Height, Vec3d(0.79, 0, 0.05), ""});
   s.gauges.push_back({"cup_rim", GaugeKind::Node, Vec3d(0.64, 0.08, 0.05), "cup"});

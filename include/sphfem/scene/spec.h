@@ -107,8 +107,8 @@ struct BodySpec {
   Material material;
   Vec3d velocity;               // m/s, initial velocity of the free nodes
   PinSpec pinned;
-  double restitution = 0.0;     // fluid contact, normal: kept for the coupling
-  double slip = 1.0;            // fluid contact, tangential: kept for the coupling
+  double restitution = 0.0;     // fluid contact: share of the normal relative velocity reversed
+  double slip = 1.0;            // fluid contact: share of the tangential relative velocity kept
 };
 
 // Settings of the FEM solve shared by all bodies; defaults are the solver's own.
@@ -118,6 +118,19 @@ struct FemSpec {
   int newton_iterations = FemSettings{}.newton_iterations;
   int rotation_iterations = FemSettings{}.rotation_iterations;
   double friction = FemSettings{}.friction;  // Coulomb, nodes sliding on the tank walls
+};
+
+enum class CouplingMethod { RayTraced, BoundaryParticles };
+
+// How the fluid and the bodies exchange momentum (paper §3.3-4 and its baseline).
+struct CouplingSpec {
+  CouplingMethod method = CouplingMethod::RayTraced;
+  double skin = 0.25;                 // fraction of the particle radius kept off a surface
+  bool near_surface_density = true;   // add the kernel mass missing beyond a body's surface
+  bool tank_rays = true;              // the tank's faces join the ray cast as static colliders
+  double rebuild_quality = 2.0;       // rebuild a BVH when its box area grows by this factor
+  double wall_restitution = 0.0;      // the tank's faces (static colliders)
+  double wall_slip = 1.0;
 };
 
 struct SceneSpec {
@@ -130,6 +143,7 @@ struct SceneSpec {
   std::vector<GaugeSpec> gauges;
   std::vector<BodySpec> bodies;
   FemSpec fem;
+  CouplingSpec coupling;
 
   bool has_fluid() const { return !fluid.blocks.empty() || !fluid.emitters.empty(); }
 };
