@@ -17,7 +17,7 @@ assets:
 	@bash scripts/fetch-bunny.sh build/assets || echo "note: the bunny mesh was not fetched (scenes/paper/bunny.json and dragon.json need it)"
 
 configure: deps assets
-	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DSPHFEM_MARCH=native $(CMAKE_ARGS) >/dev/null
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DSPHFEM_MARCH=native -DSPHFEM_ENABLE_GL=ON $(CMAKE_ARGS) >/dev/null
 
 build: configure
 	@cmake --build $(BUILD) -j$(JOBS)

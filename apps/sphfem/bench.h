@@ -14,6 +14,9 @@ struct BenchOptions {
   std::string out_dir;
   bool fem = false;
   std::string mesh;  // --fem: surface to tetrahedralise; empty = the fetched bunny
+  bool paper = false;
+  std::string method = "both";  // --paper: raytraced, boundary_particles or both
+  std::string scenes;           // --paper: folder of the paper's scenes (default scenes/paper)
 };
 
 // Measured steps of the FEM benchmark when --steps is not given.
@@ -22,3 +25,6 @@ constexpr int kFemBenchSteps = 50;
 int run_bench(const BenchOptions& opt);
 std::string cpu_model();  // the CPU's model name, for result files
 int run_fem_bench(const BenchOptions& opt);
+int run_paper_bench(const BenchOptions& opt);  // Table 1 of the paper (bench_paper.cpp)
+// Measured steps of the paper benchmark when --steps is not given.
+constexpr int kPaperBenchSteps = 50;

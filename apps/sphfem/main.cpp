@@ -1,5 +1,5 @@
-// The sphfem command: run, check and bench. Bad input exits with code 2 and one line that
-// names the file, the field and the fix; a run that blows up exits with code 3.
+// The sphfem command: run, check, bench, render and view. Bad input exits with code 2 and one line
+// that names the file, the field and the fix; a run that blows up exits with code 3.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
@@ -12,6 +12,7 @@
 #include "sphfem/scene/load.h"
 #include "sphfem/sim/run.h"
 #include "sphfem/sph/solver.h"
+#include "view_cmd.h"
 
 namespace {
 
@@ -98,6 +99,10 @@ int cmd_run(const std::string& path, const std::string& out, const std::string& 
         "wall (%.1f steps/s)\n",
         r.particles, r.body_nodes, r.bodies, r.steps, r.sim_seconds, r.wall_seconds,
         r.wall_seconds > 0 ? r.steps / r.wall_seconds : 0.0);
+    if (r.bodies > 0 && s.has_fluid())
+      std::printf(
+          "leaks: %ld particles crossed a body surface; at most %ld inside a body at a frame\n",
+          r.crossed, r.inside_max);
     std::string files = s.has_fluid() ? "fluid.pvd, " : "";
     if (r.bodies > 0) files += "bodies.pvd, bodies_tets.pvd, ";
     std::printf("output: %s (%d frames in frames/, %sgauges.csv)\n", r.out_dir.c_str(), r.frames,
@@ -144,6 +149,12 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"cpu", "cuda"}));
   bench->add_option("--out", bench_opt.out_dir, "folder for the result file (none = print only)");
   bench->add_option("--particles-per-side", bench_opt.side, "block of N^3 particles (default 40)");
+  bench->add_flag("--paper", bench_opt.paper,
+                  "the paper's Table 1: each scene of scenes/paper with a 64,800-particle block, "
+                  "ray-traced vs boundary-particle coupling");
+  bench->add_option("--method", bench_opt.method, "--paper: raytraced, boundary_particles or both")
+      ->check(CLI::IsMember({"raytraced", "boundary_particles", "both"}));
+  bench->add_option("--scenes", bench_opt.scenes, "--paper: folder of the scenes (scenes/paper)");
   bench->add_flag("--fem", bench_opt.fem,
                   "FEM ms/step for spheres and the bunny at the tetrahedron counts of the paper's "
                   "Table 1, instead of the fluid");
@@ -152,30 +163,34 @@ int main(int argc, char** argv) {
                     "written by scripts/fetch-bunny.sh build/assets)");
 
   RenderOptions render_opt;
-  std::string size = "1280x720";
-  auto* render = app.add_subcommand("render", "draw a run's frames as PNG images in OUT/images");
-  render->add_option("out", render_opt.out_dir, "folder written by `sphfem run`")->required();
-  render->add_option("--size", size, "image size WIDTHxHEIGHT (default 1280x720)");
-  render->add_option("--frames", render_opt.frames, "all, last or a frame number (default all)");
+  auto* render = add_render_command(app, render_opt);
+  bool render_after = false, bench_render = false;
+  run->add_flag("--render", render_after, "then draw every frame as `sphfem render OUT` does");
+  bench->add_flag("--render", bench_render,
+                  "ms per frame of the OpenGL and software renderers at 1280x720, ~65k particles");
+  ViewOptions view_opt;
+  auto* view = add_view_command(app, view_opt);
 
   CLI11_PARSE(app, argc, argv);
-  if (*render) {
-    if (std::sscanf(size.c_str(), "%dx%d", &render_opt.width, &render_opt.height) != 2 ||
-        render_opt.width < 16 || render_opt.height < 16 || render_opt.width > 16384 ||
-        render_opt.height > 16384) {
-      std::fprintf(stderr, "error: --size %s: expected WIDTHxHEIGHT, e.g. 1280x720\n",
-                   size.c_str());
-      return 2;
-    }
-  }
   try {
     if (*check) return cmd_check(scene);
-    if (*run) return cmd_run(scene, out, backend, threads, duration, quiet);
+    if (*run) {
+      const int code = cmd_run(scene, out, backend, threads, duration, quiet);
+      if (code != 0 || !render_after) return code;
+      render_opt.out_dir = out.empty() ? default_out(scene) : out;
+      return run_render(render_opt);
+    }
     if (*bench) {
+      if (bench_render) return run_render_bench(bench_opt.out_dir);
+      if (bench_opt.paper) {
+        if (bench->count("--steps") == 0) bench_opt.steps = kPaperBenchSteps;
+        return run_paper_bench(bench_opt);
+      }
       if (bench_opt.fem && bench->count("--steps") == 0) bench_opt.steps = kFemBenchSteps;
       return bench_opt.fem ? run_fem_bench(bench_opt) : run_bench(bench_opt);
     }
     if (*render) return run_render(render_opt);
+    if (*view) return run_view(view_opt);
   } catch (const SceneError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;

@@ -1,9 +1,11 @@
 #include "sphfem/io/vtu.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -114,7 +116,30 @@ void write_vtu(const std::string& path, const PointSet& frame) {
   });
 }
 
-PointSet read_vtu_points(const std::string& path) {
+namespace {
+
+// One array of the <Cells> section: Int32 connectivity and offsets, UInt8 types.
+template <class Bad>
+void read_cell_block(std::map<std::string, std::string>& attrs, const char* src,
+                     std::uint64_t bytes, std::size_t n_cells, PointSet& out, const Bad& bad) {
+  const std::string& name = attrs["Name"];
+  if (name == "types") {
+    if (attrs["type"] != "UInt8" || bytes != n_cells)
+      throw bad("cell types are not UInt8 per cell");
+    out.types.assign(src, src + bytes);
+    return;
+  }
+  if (name != "connectivity" && name != "offsets") return;
+  if (attrs["type"] != "Int32" || bytes % 4 != 0) throw bad("cell " + name + " are not Int32");
+  if (name == "offsets" && bytes != 4 * n_cells) throw bad("one offset per cell expected");
+  std::vector<std::int32_t>& v = name == "offsets" ? out.offsets : out.connectivity;
+  v.resize(bytes / 4);
+  copy_le(v.data(), src, v.size(), 4);
+}
+
+// Both readers: points and point arrays always; with `cells`, also connectivity, offsets,
+// types and the cell arrays.
+PointSet read_vtu_file(const std::string& path, bool cells) {
   const std::string data = read_all(path);
   auto bad = [&](const std::string& why) {
     return std::runtime_error("'" + path + "' is not a VTU file written by write_vtu: " + why);
@@ -141,7 +166,7 @@ PointSet read_vtu_points(const std::string& path) {
   const std::string xml = data.substr(0, appended);
 
   PointSet out;
-  std::size_t n = 0;
+  std::size_t n = 0, n_cells = 0;
   bool have_piece = false, have_points = false;
   std::string section;
   for (std::size_t lt = xml.find('<'); lt != std::string::npos; lt = xml.find('<', lt + 1)) {
@@ -165,6 +190,8 @@ PointSet read_vtu_points(const std::string& path) {
       have_piece = true;
       n = number(attrs["NumberOfPoints"]);
       if (n > data.size()) throw bad("more points than bytes");
+      n_cells = attrs.count("NumberOfCells") ? number(attrs["NumberOfCells"]) : 0;
+      if (n_cells > data.size()) throw bad("more cells than bytes");
     } else if (name == "PointData" || name == "CellData" || name == "Points" || name == "Cells") {
       if (!self_closing) section = name;
     } else if (name == "DataArray") {
@@ -178,14 +205,19 @@ PointSet read_vtu_points(const std::string& path) {
       const std::size_t at = base + offset;
       copy_le(&bytes, data.data() + at, 1, sizeof(bytes));
       if (bytes > limit - at - sizeof(bytes)) throw bad("array '" + attrs["Name"] + "' truncated");
-      if (section != "PointData" && section != "Points") continue;
+      if (section == "Cells" && cells) {
+        read_cell_block(attrs, data.data() + at + sizeof(bytes), bytes, n_cells, out, bad);
+        continue;
+      }
+      const bool cell_data = section == "CellData" && cells;
+      if (section != "PointData" && section != "Points" && !cell_data) continue;
 
       const std::string& type = attrs["type"];
       if (type != "Float32" && type != "Int32") throw bad("unsupported type '" + type + "'");
       const std::uint64_t components =
           attrs.count("NumberOfComponents") ? number(attrs["NumberOfComponents"]) : 1;
       if (components < 1 || components > 64) throw bad("bad component count");
-      const std::size_t count = n * components;
+      const std::size_t count = (cell_data ? n_cells : n) * components;
       if (bytes != count * 4) throw bad("array '" + attrs["Name"] + "' has the wrong size");
       const char* src = data.data() + at + sizeof(bytes);
 
@@ -205,13 +237,33 @@ PointSet read_vtu_points(const std::string& path) {
           a.values.resize(count);
           copy_le(a.values.data(), src, count, 4);
         }
-        out.point_data.push_back(std::move(a));
+        (cell_data ? out.cell_data : out.point_data).push_back(std::move(a));
       }
     }
   }
   if (!have_piece) throw bad("no piece");
   if (!have_points) throw bad("no points");
+  if (cells) {
+    // A point cloud reads back as written: one vertex cell per point, kept as no cells.
+    const bool cloud = std::all_of(out.types.begin(), out.types.end(),
+                                   [](std::uint8_t t) { return t == kVtkVertex; });
+    if (cloud) {
+      out.connectivity.clear();
+      out.offsets.clear();
+      out.types.clear();
+      out.cell_data.clear();
+    }
+    try {
+      validate(out);
+    } catch (const std::invalid_argument& e) { throw bad(e.what()); }
+  }
   return out;
 }
+
+}  // namespace
+
+PointSet read_vtu_points(const std::string& path) { return read_vtu_file(path, false); }
+
+PointSet read_vtu(const std::string& path) { return read_vtu_file(path, true); }
 
 }  // namespace sphfem::io

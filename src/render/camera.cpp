@@ -69,13 +69,13 @@ Projection project(const Camera& cam, const Vec3d& world) {
   return p;
 }
 
-Camera auto_frame(const Vec3d& lo_in, const Vec3d& hi_in, int width, int height) {
+Camera auto_frame(const Vec3d& lo_in, const Vec3d& hi_in, int width, int height, double fov_y_deg) {
   const Vec3d lo = vmin(lo_in, hi_in), hi = vmax(lo_in, hi_in);
   const double diag = norm(hi - lo) > 0 ? norm(hi - lo) : 1.0;
   Camera cam;
   cam.width = std::max(width, 1);
   cam.height = std::max(height, 1);
-  cam.fov_y_deg = 35.0;
+  cam.fov_y_deg = std::clamp(fov_y_deg, 1.0, 170.0);
   cam.up = Vec3d(0, 1, 0);
   // 25 degrees to the side and 22 above: both side walls' depth and the floor stay readable.
   const double az = 25.0 * kPi / 180.0, el = 22.0 * kPi / 180.0;

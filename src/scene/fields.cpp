@@ -439,8 +439,8 @@ const ObjectTable& body_table() {
   static const ObjectTable t =
       Table<BodySpec>("bodies[]",
                       "Deformable bodies: co-rotated linear FEM on tetrahedra, each a generated "
-                      "shape or a mesh file. Until the fluid coupling arrives, bodies feel "
-                      "gravity and the tank's six walls (a lid even when `open_top`) only.")
+                      "shape or a mesh file. Bodies feel gravity, the tank's six walls (a lid "
+                      "even when `open_top`) and the fluid (see `coupling`).")
           .string("name", &BodySpec::name,
                   "Name in logs, run.json and the gauge columns `<name>_kinetic_energy` and "
                   "`<name>_elastic_energy`; empty names become `body<i>`, i being the position in "

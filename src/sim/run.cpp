@@ -1,4 +1,5 @@
-// The run loop: fluid step, then the bodies with the same dt; frames, gauges and progress.
+// The run loop: the fluid step, inside which (ray-traced coupling) the bodies step with the
+// same dt and exchange momentum with the particles; frames, gauges and progress.
 #include "sphfem/sim/run.h"
 
 #include <unistd.h>
@@ -12,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "sphfem/collide/collider.h"
+#include "sphfem/couple/ray_coupling.h"
 #include "sphfem/fem/energy.h"
 #include "sphfem/fem/solver.h"
 #include "sphfem/io/atomic_file.h"
@@ -22,6 +25,7 @@
 #include "sphfem/scene/bodies.h"
 #include "sphfem/sim/body_frames.h"
 #include "sphfem/sim/metrics.h"
+#include "sphfem/sim/simulation.h"
 #include "sphfem/sph/solver.h"
 
 namespace sphfem {
@@ -69,10 +73,18 @@ std::vector<std::string> gauge_columns(const SceneSpec& scene) {
                                 "clamped",
                                 "pressure_iterations",
                                 "divergence_iterations",
-                                "fem_cg_iterations"};
+                                "fem_cg_iterations",
+                                "leaked",
+                                "crossed",
+                                "inside_bodies",
+                                "contacts",
+                                "momentum_total_x",
+                                "momentum_total_y",
+                                "momentum_total_z"};
   for (int p = 0; p < int(Phase::Count); ++p)
     c.push_back(std::string("ms_") + phase_name(Phase(p)));
   c.push_back("ms_fem");
+  c.push_back("ms_leak_check");
   c.push_back("ms_step");
   for (const GaugeSpec& g : scene.gauges) {
     if (g.kind != GaugeKind::Node) {
@@ -84,6 +96,8 @@ std::vector<std::string> gauge_columns(const SceneSpec& scene) {
   for (const BodySpec& b : scene.bodies) {
     c.push_back(b.name + "_kinetic_energy");
     c.push_back(b.name + "_elastic_energy");
+    for (const char* axis : {"_fluid_force_x", "_fluid_force_y", "_fluid_force_z"})
+      c.push_back(b.name + axis);
   }
   return c;
 }
@@ -170,21 +184,12 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
   if (opt.threads > 0) set_cpu_threads(opt.threads);
   const double duration = opt.duration >= 0 ? opt.duration : scene.simulation.duration;
   // Everything that can fail on input happens before the first file is written.
-  if (!scene.has_fluid() && scene.bodies.empty())
-    throw std::runtime_error(
-        "the scene has nothing to simulate; add fluid.blocks, fluid.emitters or bodies");
-  FluidModel model;
-  std::unique_ptr<FluidSolver> solver;
-  if (scene.has_fluid()) {
-    model = compile_fluid(scene);
-    solver = make_fluid_solver(model, opt.backend);
-  }
-  BodiesModel bodies;
-  std::unique_ptr<BodySolver> fem;
-  if (!scene.bodies.empty()) {
-    bodies = compile_scene_bodies(scene);
-    fem = make_body_solver(bodies, opt.backend);
-  }
+  Simulation sim(scene, opt.backend);
+  FluidSolver* solver = sim.fluid();
+  BodySolver* fem = sim.bodies();
+  RayCoupling* hook = sim.coupling();
+  const FluidModel& model = sim.fluid_model();
+  const BodiesModel& bodies = sim.bodies_model();
   const std::vector<int> gauge_node = gauge_nodes(scene, bodies);
 
   RunSummary sum;
@@ -229,8 +234,9 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
     meter = std::make_unique<BodyEnergyMeter>(fem->model());
   }
   StepInfo last;
-  double t = 0;
+  double t = 0, t_frame = 0;
   long steps = 0, steps_since = 0, piter = 0, diter = 0, clamped = 0;
+  long crossed_total = 0, inside_max = 0;
 
   auto body_metrics = [&](BodyMetrics& bm) {
     fem->snapshot(body_snap);
@@ -248,6 +254,15 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
     if (fem) body_metrics(bm);
     if (solver) solver->snapshot(snap);
     const FrameMetrics m = compute_metrics(snap, model, scene.gauges, scene.domain);
+    // Leaks: particles inside a body now, and those that crossed a surface since the last frame.
+    const long inside = solver && fem ? sim.count_inside(snap.x, body_snap.x) : 0;
+    const RayCouplingStats hs = hook ? hook->stats() : RayCouplingStats();
+    crossed_total += hs.crossed;
+    inside_max = std::max(inside_max, inside);
+    Vec3d p_total(m.momentum[0], m.momentum[1], m.momentum[2]);
+    if (fem)
+      for (int i = 0; i < bodies.nodes; ++i)
+        p_total += Vec3d(body_snap.v[std::size_t(i)]) * double(bodies.mass[std::size_t(i)]);
     if (solver && (scene.output.vtu || scene.output.ply)) {
       std::snprintf(name, sizeof name, "fluid_%06d", frame);
       const io::PointSet ps = fluid_frame(snap);
@@ -283,14 +298,27 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
                                double(clamped),
                                steps_since ? double(piter) / steps_since : 0.0,
                                steps_since ? double(diter) / steps_since : 0.0,
-                               double(fprof.cg_iterations) * fper};
+                               double(fprof.cg_iterations) * fper,
+                               double(inside + hs.crossed),
+                               double(hs.crossed),
+                               double(inside),
+                               hs.steps ? double(hs.contacts) / double(hs.steps) : 0.0,
+                               p_total.x,
+                               p_total.y,
+                               p_total.z};
+    // The hook's time inside the fluid step holds the bodies' step and the leak check; they
+    // get their own columns, so ms_coupling is the collision detection and response alone.
+    const double hook_aside = hs.ms_fem + hs.ms_leak_check;
     double total = 0;
     for (int p = 0; p < int(Phase::Count); ++p) {
-      row.push_back(prof.ms[p] * per);
-      total += prof.ms[p] * per;
+      double ms = prof.ms[p];
+      if (Phase(p) == Phase::Coupling) ms = std::max(0.0, ms - hook_aside);
+      row.push_back(ms * per);
+      total += ms * per;
     }
     row.push_back(fprof.ms_total() * fper);
     total += fprof.ms_total() * fper;
+    row.push_back(hs.ms_leak_check * per);
     row.push_back(total);
     std::size_t probe = 0, followed = 0;
     for (const GaugeSpec& g : scene.gauges) {
@@ -301,30 +329,21 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
       const Vec3d d = bm.displacement.at(followed++);
       row.insert(row.end(), {d.x, d.y, d.z});
     }
+    const double span = t - t_frame;
     for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
       row.push_back(bm.kinetic_energy.at(b));
       row.push_back(bm.elastic_energy.at(b));
+      // Mean force of the fluid on the body since the last frame: impulse over time.
+      const Vec3d f = b < hs.body_impulse.size() && span > 0 ? hs.body_impulse[b] / span : Vec3d();
+      row.insert(row.end(), {f.x, f.y, f.z});
     }
+    if (hook) hook->reset_stats();
+    t_frame = t;
     gauges.row(row);
     if (solver) solver->reset_profile();
     if (fem) fem->reset_profile();
     steps_since = piter = diter = 0;
     ++sum.frames;
-  };
-
-  // The bodies step with the fluid's dt and feel no fluid yet: the ray-traced two-way
-  // coupling (docs/design.md) is not implemented, so fluid and bodies only share the clock.
-  auto step_bodies = [&](double dt) {
-    bool finite = true;
-    try {
-      finite = std::isfinite(fem->step(dt).cg_residual);
-    } catch (const std::runtime_error&) {
-      finite = false;  // the solver's own NaN check: the right-hand side was not finite
-    }
-    if (!finite) {
-      fem->snapshot(body_snap);
-      throw body_blow_up(steps, t, bodies, non_finite_body(bodies, body_snap));
-    }
   };
 
   try {
@@ -334,21 +353,18 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
     while (t < duration - 1e-12) {
       const double next = std::min(duration, frame * frame_dt);
       double dt = 0;
-      if (solver) {
-        last = solver->step(next - t);
-        dt = last.dt;
-        t = solver->time();
-      } else {
-        // Without fluid: equal steps of at most dt_max that end on the frame's time.
-        const double left = next - t;
-        const double n = std::max(1.0, std::ceil(left / dt_max - 1e-9));
-        dt = left / n;
-        last = StepInfo();
-        last.dt = dt;
-        t = n <= 1.0 ? next : t + dt;
+      // Without fluid: equal steps of at most dt_max that end on the frame's time.
+      const double left = next - t;
+      const double n = std::max(1.0, std::ceil(left / dt_max - 1e-9));
+      try {
+        last = sim.step(solver ? left : left / n);
+      } catch (const BodyStepError&) {
+        fem->snapshot(body_snap);
+        throw body_blow_up(steps + 1, t, bodies, non_finite_body(bodies, body_snap));
       }
+      dt = last.dt;
+      t = solver ? solver->time() : (n <= 1.0 ? next : t + dt);
       ++steps;
-      if (fem) step_bodies(dt);
       ++steps_since;
       piter += last.pressure_iterations;
       diter += last.divergence_iterations;
@@ -366,6 +382,8 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
   progress.update(t, steps, wall(), true);
   progress.done();
   sum.steps = steps;
+  sum.crossed = crossed_total;
+  sum.inside_max = inside_max;
   sum.particles = solver ? solver->count() : 0;
   sum.bodies = int(bodies.bodies.size());
   sum.body_nodes = bodies.nodes;

@@ -7,8 +7,8 @@ namespace sphfem {
 std::unique_ptr<FluidSolver> make_cuda_fluid_solver(const FluidModel& model);
 
 const char* phase_name(Phase p) {
-  static const char* names[] = {"neighbors", "density", "divergence", "forces",
-                                "pressure",  "integrate", "emit"};
+  static const char* names[] = {"neighbors", "density",   "divergence", "forces",
+                                "pressure",  "integrate", "emit",       "coupling"};
   return names[int(p)];
 }
 

@@ -6,9 +6,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "sph/moving_stages.h"
 #include "sph/stages.h"
 #include "sphfem/core/memory.h"
 #include "sphfem/sph/solver.h"
@@ -17,6 +19,7 @@ namespace sphfem {
 
 using stages::BoundaryView;
 using stages::FluidView;
+using stages::Walls;
 
 template <class Exec>
 class SolverT final : public FluidSolver {
@@ -44,6 +47,14 @@ class SolverT final : public FluidSolver {
     next_id_ = std::uint32_t(n_);
 
     upload_boundary();
+    // The space beyond a surface filled like the tank's walls (sph/surface_density.h).
+    const double layer = double(P_.spacing) / double(P_.h);
+    const double lattice_mass =
+        double(P_.mass) / (double(P_.rho0) * std::pow(double(P_.spacing), 3));
+    const std::vector<Real> half =
+        half_space_table(P_.kernel, kHalfSpaceSteps, layer, lattice_mass);
+    half_ = Buffer<Real>(s, half.size());
+    half_.upload(half.data(), half.size());
     for (const EmitterModel& e : m.emitters) {
       discs_.emplace_back(s, e.disc.size());
       discs_.back().upload(e.disc.data(), e.disc.size());
@@ -58,19 +69,91 @@ class SolverT final : public FluidSolver {
   const Profile& profile() const override { return prof_; }
   void reset_profile() override { prof_.clear(); }
   const FluidModel& model() const override { return model_; }
+  void set_hook(StepHook* hook) override { hook_ = hook; }
+
+  void set_moving_samples(const std::vector<SurfaceSample>& samples, const std::vector<Tri>& tris,
+                          int nodes) override {
+    const int n = int(samples.size());
+    std::vector<int> tri(n);
+    std::vector<Vec3> w(n);
+    // Gather lists node -> (sample, weight), so the nodes sum their samples' impulses in a
+    // fixed order without atomics.
+    std::vector<int> start(std::size_t(std::max(nodes, 0)) + 1, 0);
+    for (int k = 0; k < n; ++k) {
+      const SurfaceSample& sm = samples[k];
+      if (sm.tri < 0 || sm.tri >= int(tris.size()))
+        throw std::invalid_argument("set_moving_samples: sample " + std::to_string(k) +
+                                    " names triangle " + std::to_string(sm.tri) + " of " +
+                                    std::to_string(tris.size()));
+      tri[k] = sm.tri;
+      w[k] = Vec3(sm.w[0], sm.w[1], sm.w[2]);
+      for (int c = 0; c < 3; ++c) {
+        const int node = tris[sm.tri].v[c];
+        if (node < 0 || node >= nodes)
+          throw std::invalid_argument("set_moving_samples: triangle " + std::to_string(sm.tri) +
+                                      " names node " + std::to_string(node) + " of " +
+                                      std::to_string(nodes));
+        if (sm.w[c] != Real(0)) ++start[node + 1];
+      }
+    }
+    for (int i = 0; i < nodes; ++i) start[i + 1] += start[i];
+    std::vector<int> sample(start.back());
+    std::vector<Real> weight(start.back());
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (int k = 0; k < n; ++k)
+      for (int c = 0; c < 3; ++c) {
+        if (samples[k].w[c] == Real(0)) continue;
+        const int e = fill[tris[samples[k].tri].v[c]]++;
+        sample[e] = k;
+        weight[e] = samples[k].w[c];
+      }
+    const MemSpace s = Exec::kSpace;
+    const std::size_t cap = std::size_t(std::max(n, 1));
+    msamples_ = n;
+    mnodes_ = n ? nodes : 0;
+    mtri_ = Buffer<int>(s, cap);
+    mtri_.upload(tri.data(), n);
+    mw_ = Buffer<Vec3>(s, cap);
+    mw_.upload(w.data(), n);
+    for (Buffer<Vec3>* b : {&mx_, &mv_, &mtmpx_, &mtmpv_, &mimp_}) *b = Buffer<Vec3>(s, cap);
+    for (Buffer<Real>* b :
+         {&mpsi_, &mrest_, &mpw_, &mrho_, &malpha_, &mkappa_, &mksum_, &mwarm_div_, &mwarm_dens_}) {
+      *b = Buffer<Real>(s, cap);
+      b->zero();
+    }
+    mnb_rest_ = Buffer<int>(s, cap);
+    mfull_ = Buffer<int>(s, cap);
+    for (Buffer<std::uint32_t>* b : {&mkeys_, &mperm_, &mslot_}) *b = Buffer<std::uint32_t>(s, cap);
+    mstart_ = Buffer<std::uint32_t>(s, std::size_t(model_.grid.cells()) + 1);
+    mnode_start_ = Buffer<int>(s, start.size());
+    mnode_start_.upload(start.data(), start.size());
+    mnode_sample_ = Buffer<int>(s, std::max<std::size_t>(sample.size(), 1));
+    mnode_sample_.upload(sample.data(), sample.size());
+    mnode_w_ = Buffer<Real>(s, std::max<std::size_t>(weight.size(), 1));
+    mnode_w_.upload(weight.data(), weight.size());
+    mactive_ = 0;
+  }
 
   StepInfo step(double dt_limit) override {
     StepInfo info;
     const bool dfsph = model_.solver == SolverKind::DFSPH;
-    timed(Phase::Neighbors, [&] { sort_particles(); });
+    timed(Phase::Neighbors, [&] {
+      place_moving_samples();
+      sort_particles();
+    });
+    prox_ = SurfaceProximity();
+    if (hook_) timed(Phase::Coupling, [&] { prox_ = hook_->proximity(arrays()); });
     const GridView g = grid(start_.data());
-    const BoundaryView b = boundary();
+    const Walls w = walls();
+    const BoundaryView& b = w.fixed;
+    const BoundaryView& mb = w.moving;
     FluidView f = view();
     timed(Phase::Density, [&] {
-      stages::density(ex_, P_, f, g, b, dfsph);
+      stages::density(ex_, P_, f, g, w, dfsph);
       if (dfsph) {
         active_walls_ = stages::wall_density(ex_, P_, f, g, b);
-        stages::dfsph_smooth_warm(ex_, P_, f, g, b, tmpr_.data());
+        if (mb.n) active_walls_ += stages::wall_density(ex_, P_, f, g, mb);
+        stages::dfsph_smooth_warm(ex_, P_, f, g, w, tmpr_.data());
         warm_dens_.swap(tmpr_);
         f.warm_dens = warm_dens_.data();
       }
@@ -84,24 +167,41 @@ class SolverT final : public FluidSolver {
     // this step in the warm starts (stages::dfsph_source, stages::dfsph_remember).
     const Real pace = Real(dt / dt_free);
     info.dt = dt;
+    Vec3* J = mimp_.data();  // impulse on the moving samples, this step
     if (dfsph) {
       timed(Phase::Divergence, [&] {
-        info.divergence_iterations = solve(f, g, b, rdt, pace, true, model_.divergence_tolerance);
+        info.divergence_iterations = solve(f, g, w, rdt, pace, true, model_.divergence_tolerance);
+        if (mb.n) stages::sample_pressure_impulse(ex_, P_, f, g, mb, rdt, J);
       });
-      timed(Phase::Forces, [&] { stages::accelerations(ex_, P_, f, g, b, false, rdt); });
+      timed(Phase::Forces, [&] {
+        stages::accelerations(ex_, P_, f, g, w, false, rdt);
+        if (mb.n) stages::sample_force_impulse(ex_, P_, f, g, mb, false, rdt, J);
+      });
       timed(Phase::Integrate, [&] { stages::kick(ex_, f, rdt); });
       timed(Phase::Pressure, [&] {
-        info.pressure_iterations = solve(f, g, b, rdt, pace, false, model_.density_tolerance);
+        info.pressure_iterations = solve(f, g, w, rdt, pace, false, model_.density_tolerance);
         info.density_error = last_error_;
+        if (mb.n) stages::sample_pressure_impulse(ex_, P_, f, g, mb, rdt, J);
       });
     } else {
       timed(Phase::Forces, [&] {
         stages::wall_pressure(ex_, P_, f, g, b);
-        stages::accelerations(ex_, P_, f, g, b, true, rdt);
+        if (mb.n) stages::wall_pressure(ex_, P_, f, g, mb);
+        stages::accelerations(ex_, P_, f, g, w, true, rdt);
+        if (mb.n) stages::sample_force_impulse(ex_, P_, f, g, mb, true, rdt, J);
       });
       timed(Phase::Integrate, [&] { stages::kick(ex_, f, rdt); });
     }
-    timed(Phase::Integrate, [&] { info.clamped = stages::drift(ex_, P_, f, rdt); });
+    if (mb.n && moving_.impulse)
+      timed(Phase::Coupling, [&] {
+        stages::node_impulse(ex_, mnodes_, mnode_start_.data(), mnode_sample_.data(),
+                             mnode_w_.data(), mslot_.data(), J, moving_.impulse);
+      });
+    DriftLimits limits;
+    if (hook_) timed(Phase::Coupling, [&] { limits = hook_->before_drift(arrays(), dt); });
+    timed(Phase::Integrate,
+          [&] { info.clamped = stages::drift(ex_, P_, f, rdt, limits.travel, limits.surface_v); });
+    if (hook_) timed(Phase::Coupling, [&] { hook_->after_drift(arrays(), dt); });
     t_ += dt;
     ++steps_;
     last_dt_ = dt;
@@ -111,11 +211,14 @@ class SolverT final : public FluidSolver {
   }
 
   void snapshot(FluidSnapshot& out) override {
-    // Densities and neighbour counts of the current positions, not of the last step's start.
+    // Densities and neighbour counts of the current positions, not of the last step's start
+    // (the hook's surfaces included).
+    place_moving_samples();
     sort_particles();
+    prox_ = hook_ ? hook_->proximity(arrays()) : SurfaceProximity();
     FluidView f = view();
-    stages::density(ex_, P_, f, grid(start_.data()), boundary(),
-                    model_.solver == SolverKind::DFSPH);
+    stages::density(ex_, P_, f, grid(start_.data()), walls(), model_.solver == SolverKind::DFSPH);
+    prox_ = SurfaceProximity();
     out.n = n_;
     out.x.resize(n_);
     out.v.resize(n_);
@@ -170,6 +273,91 @@ class SolverT final : public FluidSolver {
     b.grid = grid(bstart_.data());
     if (model_.boundary_x.empty()) b.grid.nx = 0;
     return b;
+  }
+
+  // Moving samples of this step (n = 0 when none were placed).
+  BoundaryView moving() {
+    BoundaryView b;
+    b.n = mactive_;
+    if (!mactive_) {
+      b.grid.nx = 0;
+      return b;
+    }
+    b.x = mx_.data();
+    b.v = moving_.v ? mv_.data() : nullptr;
+    b.psi = mpsi_.data();
+    b.rest = mrest_.data();
+    b.nb_rest = mnb_rest_.data();
+    b.pw = mpw_.data();
+    b.rho = mrho_.data();
+    b.alpha = malpha_.data();
+    b.full = mfull_.data();
+    b.kappa = mkappa_.data();
+    b.kappa_sum = mksum_.data();
+    b.warm_div = mwarm_div_.data();
+    b.warm_dens = mwarm_dens_.data();
+    b.grid = grid(mstart_.data());
+    return b;
+  }
+
+  Walls walls() {
+    Walls w;
+    w.fixed = boundary();
+    w.moving = moving();
+    if (prox_.dist && prox_.normal) {
+      w.surface.dist = prox_.dist;
+      w.surface.normal = prox_.normal;
+      w.surface.vel = prox_.velocity;
+    }
+    w.surface.half.table = half_.data();
+    w.surface.half.n = kHalfSpaceSteps;
+    w.surface.half.inv_h = Real(1) / P_.h;
+    return w;
+  }
+
+  // Boundary-particle coupling: the samples on the hook's surface as it is now, sorted into
+  // their own cell grid, with psi and (DFSPH) their walls-alone density; impulses start at 0.
+  void place_moving_samples() {
+    mactive_ = 0;
+    moving_ = MovingSurface();
+    if (!hook_ || !msamples_) return;
+    moving_ = hook_->moving_boundary(arrays());
+    if (moving_.nodes == 0 || !moving_.x || !moving_.tri) return;
+    if (moving_.space != Exec::kSpace)
+      throw std::runtime_error(
+          "StepHook::moving_boundary: the surface is in another memory space than the fluid "
+          "solver's; pass the body solver's arrays of the same backend");
+    if (moving_.nodes != mnodes_)
+      throw std::runtime_error("StepHook::moving_boundary: the surface has " +
+                               std::to_string(moving_.nodes) + " nodes, set_moving_samples " +
+                               std::to_string(mnodes_));
+    const int n = msamples_;
+    const GridView g = grid(mstart_.data());
+    stages::place_samples(ex_, n, mtri_.data(), mw_.data(), moving_.tri, moving_.x, moving_.v,
+                          mtmpx_.data(), moving_.v ? mtmpv_.data() : nullptr);
+    stages::cell_keys(ex_, g, mtmpx_.data(), mkeys_.data(), mperm_.data(), n);
+    sort_pairs(ex_, mkeys_.data(), mperm_.data(), n, key_bits());
+    stages::gather(ex_, mtmpx_.data(), mx_.data(), mperm_.data(), n);
+    if (moving_.v) stages::gather(ex_, mtmpv_.data(), mv_.data(), mperm_.data(), n);
+    stages::invert(ex_, mperm_.data(), mslot_.data(), n);
+    stages::cell_starts(ex_, mkeys_.data(), mstart_.data(), n, g.cells());
+    mactive_ = n;
+    const BoundaryView b = moving();
+    stages::sample_psi(ex_, P_, b, mpsi_.data());
+    stages::wall_rest(ex_, P_, mrest_.data(), mnb_rest_.data(), b, stages::kMovingRestShare);
+    mimp_.zero();
+  }
+
+  FluidArrays arrays() {
+    FluidArrays a;
+    a.space = Exec::kSpace;
+    a.n = n_;
+    a.x = x_.data();
+    a.v = v_.data();
+    a.id = id_.data();
+    a.mass = P_.mass;
+    a.radius = P_.spacing / Real(2);
+    return a;
   }
 
   FluidView view() {
@@ -282,20 +470,30 @@ class SolverT final : public FluidSolver {
   // kMinSweeps run, so the pressure keeps building while the mean error is still small
   // (Bender & Koschier 2017 also iterate at least twice): without them a resting column fell
   // freely until its bottom layers were compressed by several per cent.
-  int solve(FluidView f, const GridView& g, const BoundaryView& b, Real dt, Real pace,
-            bool divergence, double tol) {
-    stages::dfsph_warm_start(ex_, f, b, divergence);
-    stages::dfsph_apply(ex_, P_, f, g, b, dt);
+  int solve(FluidView f, const GridView& g, const Walls& w, Real dt, Real pace, bool divergence,
+            double tol) {
+    const BoundaryView& b = w.fixed;
+    const BoundaryView& mb = w.moving;
+    stages::dfsph_warm_start(ex_, f, divergence);
+    stages::wall_warm_start(ex_, b, divergence);
+    if (mb.n) stages::wall_warm_start(ex_, mb, divergence);
+    auto apply = [&] {
+      stages::dfsph_apply(ex_, P_, f, g, w, dt);
+      stages::wall_accumulate(ex_, b);
+      if (mb.n) stages::wall_accumulate(ex_, mb);
+    };
+    apply();
     const int samples = n_ + active_walls_;
     int it = 0;
     last_error_ = 0;
     for (;; ++it) {
-      const double sum = stages::dfsph_source(ex_, P_, f, g, b, dt, pace, divergence) +
-                         stages::wall_source(ex_, P_, f, g, b, dt, pace, divergence);
+      double sum = stages::dfsph_source(ex_, P_, f, g, w, dt, pace, divergence) +
+                   stages::wall_source(ex_, P_, f, g, b, dt, pace, divergence);
+      if (mb.n) sum += stages::wall_source(ex_, P_, f, g, mb, dt, pace, divergence);
       const double err = samples ? sum / samples : 0.0;
       last_error_ = err;
       if ((err <= tol && it >= kMinSweeps) || it >= model_.max_iterations) break;
-      stages::dfsph_apply(ex_, P_, f, g, b, dt);
+      apply();
     }
     const Real memory = divergence ? Real(1) : stages::kDfsphMemory;
     stages::dfsph_remember(ex_, f, memory * pace, divergence);
@@ -356,7 +554,26 @@ class SolverT final : public FluidSolver {
   std::uint32_t next_id_ = 0;
   bool capacity_warned_ = false;
   Profile prof_;
+  StepHook* hook_ = nullptr;
   static constexpr int kMinSweeps = 2;
+
+  // Near-surface density: the hook's proximity of this step, and the half-space integrals.
+  static constexpr int kHalfSpaceSteps = 256;
+  SurfaceProximity prox_;
+  Buffer<Real> half_;
+
+  // Boundary-particle coupling: per sample (original order) its triangle and weights; per
+  // placed sample (sorted by cell) the wall quantities of BoundaryView and the impulse; the
+  // nodes' gather lists.
+  int msamples_ = 0, mnodes_ = 0, mactive_ = 0;
+  MovingSurface moving_;
+  Buffer<int> mtri_;
+  Buffer<Vec3> mw_, mx_, mv_, mtmpx_, mtmpv_, mimp_;
+  Buffer<Real> mpsi_, mrest_, mpw_, mrho_, malpha_, mkappa_, mksum_, mwarm_div_, mwarm_dens_;
+  Buffer<int> mnb_rest_, mfull_;
+  Buffer<std::uint32_t> mkeys_, mperm_, mslot_, mstart_;
+  Buffer<int> mnode_start_, mnode_sample_;
+  Buffer<Real> mnode_w_;
 };
 
 }  // namespace sphfem

@@ -6,12 +6,16 @@
 // DFSPH: Bender & Koschier 2015/2017 (divergence-free and constant-density solvers).
 // Boundaries: static samples with mass psi (Akinci et al. 2012). WCSPH gives them a pressure
 // each step (Adami, Hu & Adams 2012); DFSPH solves for their stiffness with the fluid's.
+// Samples on moving body surfaces (boundary-particle coupling) take the same code with a
+// velocity; a body surface without samples (ray-traced coupling) adds the kernel mass
+// missing beyond it (near-surface density, sph/surface_density.h).
 #pragma once
 
 #include <cstdint>
 
 #include "sphfem/sph/grid.h"
 #include "sphfem/sph/model.h"
+#include "sphfem/sph/surface_density.h"
 
 namespace sphfem::stages {
 
@@ -33,7 +37,7 @@ struct FluidView {
   std::uint32_t* id = nullptr;
 };
 
-// Static wall samples.
+// Wall samples: the tank's (static) or those on body surfaces (moving).
 struct BoundaryView {
   int n = 0;
   const Vec3* x = nullptr;
@@ -48,8 +52,58 @@ struct BoundaryView {
   Real* kappa_sum = nullptr;     // DFSPH stiffness summed over the current solve
   Real* warm_div = nullptr;      // DFSPH warm starts (wall_density)
   Real* warm_dens = nullptr;
+  const Vec3* v = nullptr;  // velocity of moving samples; nullptr: at rest
   GridView grid;
 };
+
+// The closest body surface of each particle (SurfaceProximity in sph/solver.h).
+struct SurfaceView {
+  const Real* dist = nullptr;  // nullptr: no surfaces
+  const Vec3* normal = nullptr;
+  const Vec3* vel = nullptr;  // nullptr: at rest
+  HalfSpaceView half;
+};
+
+// Everything that bounds the fluid besides the last-resort box.
+struct Walls {
+  BoundaryView fixed;   // the tank's samples
+  BoundaryView moving;  // samples on body surfaces, placed every step (n = 0: none)
+  SurfaceView surface;  // the space beyond each particle's closest surface
+};
+
+// Calls f(b, j, rij, r2) for the samples j of both sets within reach of xi, the tank's first.
+template <class F>
+SPHFEM_HD void for_wall_samples(const Walls& w, const Vec3& xi, Real h2, F&& f) {
+  for_neighbors(w.fixed.grid, w.fixed.x, xi, h2,
+                [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.fixed, j, r, r2); });
+  for_neighbors(w.moving.grid, w.moving.x, xi, h2,
+                [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.moving, j, r, r2); });
+}
+
+// Velocity of particle i relative to wall sample j.
+SPHFEM_HD Vec3 relative_to(const BoundaryView& b, std::uint32_t j, const Vec3& vi) {
+  return b.v ? vi - b.v[j] : vi;
+}
+
+// The surface beyond particle i: Phi, its slope A = -dPhi/dd, a (sph/surface_density.h), the
+// normal toward the particle, the surface velocity and q = d / h. False when out of reach.
+struct NearSurface {
+  Real phi = 0, slope = 0, normal2 = 0, q = 0;
+  Vec3 n, vs;
+};
+
+SPHFEM_HD bool near_surface(const SurfaceView& s, int i, NearSurface& o) {
+  if (!s.dist) return false;
+  const Vec3 n = s.normal[i];
+  if (n.x == Real(0) && n.y == Real(0) && n.z == Real(0)) return false;
+  const Real d = s.dist[i];
+  s.half.lookup(d, o.phi, o.slope, o.normal2);
+  if (!(o.phi > Real(0))) return false;
+  o.q = d * s.half.inv_h;
+  o.n = n;
+  o.vs = s.vel ? s.vel[i] : Vec3();
+  return true;
+}
 
 // Neighbours, fluid and wall, of a particle inside the fluid: two thirds of a full lattice
 // neighbourhood (the free-surface test of Bender & Koschier's divergence solve). Wall samples
@@ -87,8 +141,13 @@ void gather(Exec& ex, const T* src, T* dst, const std::uint32_t* perm, int n) {
 
 // Density (and the DFSPH factor): rho_i = m sum_j W_ij + sum_b psi_b W_ib. WCSPH also sets
 // the pressure from the state equation; DFSPH leaves p to its pressure solve.
+//
+// Near a surface without samples, rho_i += rho0 Phi(d) (the half-space beyond it at rest
+// density); for DFSPH its gradient, Phi'(d) n = -A n, joins the wall gradient as the
+// integral of the samples' psi_b / rho0 grad W would, and the share of the support it fills
+// counts as wall neighbours.
 template <class Exec>
-void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const BoundaryView b,
+void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w,
              bool with_alpha) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
@@ -106,16 +165,23 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const B
       }
     });
     Real rho = P.mass * sum;
-    for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      const Real rr = std::sqrt(r2);
-      rho += b.psi[j] * P.kernel.W(rr);
-      ++walls;
-      if (with_alpha) {
-        const Vec3 gw = P.kernel.grad(r, rr);
-        gwall += gw * (b.psi[j] / P.rho0);
-        gwall_v += gw * P.volume;
-      }
-    });
+    for_wall_samples(w, xi, P.h2,
+                     [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
+                       const Real rr = std::sqrt(r2);
+                       rho += b.psi[j] * P.kernel.W(rr);
+                       ++walls;
+                       if (with_alpha) {
+                         const Vec3 gw = P.kernel.grad(r, rr);
+                         gwall += gw * (b.psi[j] / P.rho0);
+                         gwall_v += gw * P.volume;
+                       }
+                     });
+    NearSurface s;
+    if (near_surface(w.surface, i, s)) {
+      rho += P.rho0 * s.phi;
+      walls += int(Real(P.full_neighbors) * half_space_volume(s.q) + Real(0.5));
+      if (with_alpha) gwall -= s.n * s.slope;
+    }
     f.rho[i] = rho;
     f.nb[i] = count;
     if (!with_alpha) {
@@ -132,6 +198,43 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const B
   });
 }
 
+// No-slip viscous acceleration of a particle with velocity vi from wall sample j, rij = x_i -
+// x_j: the fluid pair term with the wall's velocity, across the pair direction only.
+SPHFEM_HD Vec3 wall_viscous(const SphParams& P, const BoundaryView& b, std::uint32_t j,
+                            const Vec3& vi, const Vec3& r, Real r2, const Vec3& gw, Real eps2) {
+  const Vec3 u = relative_to(b, j, vi);
+  const Real vol = b.psi[j] / P.rho0;
+  const Vec3 across = u - r * (dot(u, r) / r2);
+  return across * (Real(2) * P.viscosity * vol * dot(r, gw) / (r2 + eps2));
+}
+
+// WCSPH pressure acceleration of a particle (pi_rho2 = p_i / rho_i^2) from wall sample j,
+// with the sign of a term subtracted from it.
+SPHFEM_HD Vec3 wall_pressure_term(const BoundaryView& b, std::uint32_t j, const Vec3& gw,
+                                  Real pi_rho2) {
+  return gw * (b.psi[j] * (pi_rho2 + b.pw[j]));
+}
+
+// WCSPH push of a surface without samples: the symmetric pair force of the wall samples,
+// -psi_b (p_i / rho_i^2 + p_b / rho_b^2) grad W, integrated over the half-space beyond it
+// (psi_b -> rho0 dV). The pressure there continues the particle's own with the hydrostatic
+// head, p_b(y) = p_i + rho_i g . (y - x_i), as the tank's samples extrapolate it (Adami et
+// al. 2012, eq. 27), and rho_b follows from the inverse state equation. With the integrals of
+// surface_density.h this is
+//   rho0 [(p_i / rho_i^2 + p_i / rho_b^2) A n - rho_i / rho_b^2 (a (g . n) n + Phi g_t)].
+// Without the head a particle next to the surface lacks part of its buoyancy (along a wall,
+// all of the part the wall's side of the support gives). Like p_b >= 0, the normal part
+// only pushes.
+SPHFEM_HD Vec3 surface_pressure(const SphParams& P, const NearSurface& s, Real p, Real rho) {
+  const Real rhob = P.rho0 * (Real(1) + p / P.stiffness);
+  const Real inv_b2 = Real(1) / (rhob * rhob);
+  const Real gn = dot(P.gravity, s.n);
+  const Vec3 gt = P.gravity - s.n * gn;
+  Real push = P.rho0 * ((p / (rho * rho) + p * inv_b2) * s.slope - rho * inv_b2 * s.normal2 * gn);
+  if (push < Real(0)) push = Real(0);
+  return s.n * push - gt * (P.rho0 * rho * inv_b2 * s.phi);
+}
+
 // Accelerations: gravity, viscosity (Morris et al. 1997 Laplacian, Monaghan 1992 artificial
 // viscosity, XSPH as a velocity-smoothing force) and, for WCSPH, the symmetric pressure force.
 // Walls are no-slip: the viscous term of a fluid pair, with the wall at rest, acting on the
@@ -139,9 +242,10 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const B
 // walls more pressure noise stayed in a settled tank. WCSPH walls push as
 // particles of pressure p_b (wall_pressure): psi_b (p_i / rho_i^2 + p_b / rho_b^2) grad W.
 // Akinci et al. 2012 eq. 10 alone (p_i / rho_i^2) is too weak for the frozen-lattice walls:
-// particles sank into them and the bottom pressure doubled.
+// particles sank into them and the bottom pressure doubled. Moving samples act alike with
+// the velocity relative to them; a surface without samples pushes by surface_pressure.
 template <class Exec>
-void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, const BoundaryView b,
+void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w,
                    bool with_pressure, Real dt) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i], vi = f.v[i];
@@ -168,14 +272,15 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
       acc += gw * s;
       if (P.xsph > Real(0)) acc -= vij * (P.xsph * inv_dt * (P.mass / rhoj) * P.kernel.W(rr));
     });
-    for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      if (r2 <= Real(0)) return;
-      const Vec3 gw = P.kernel.grad(r, std::sqrt(r2));
-      const Real vol = b.psi[j] / P.rho0;
-      const Vec3 across = vi - r * (dot(vi, r) / r2);
-      acc += across * (Real(2) * P.viscosity * vol * dot(r, gw) / (r2 + eps2));
-      if (with_pressure) acc -= gw * (b.psi[j] * (pi_rho2 + b.pw[j]));
-    });
+    for_wall_samples(w, xi, P.h2,
+                     [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
+                       if (r2 <= Real(0)) return;
+                       const Vec3 gw = P.kernel.grad(r, std::sqrt(r2));
+                       acc += wall_viscous(P, b, j, vi, r, r2, gw, eps2);
+                       if (with_pressure) acc -= wall_pressure_term(b, j, gw, pi_rho2);
+                     });
+    NearSurface s;
+    if (with_pressure && near_surface(w.surface, i, s)) acc += surface_pressure(P, s, f.p[i], rhoi);
     f.a[i] = acc;
   });
 }
@@ -186,6 +291,7 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
 // density of the inverse state equation; samples without fluid only look up empty cells.
 // Mirroring p_i onto the wall instead (alone or with the head in pair form) is not an
 // interaction between particles with their own pressure: it fed energy into a resting tank.
+// Moving samples take the same (without the wall's own acceleration in the head).
 template <class Exec>
 void wall_pressure(Exec& ex, const SphParams P, const FluidView f, const GridView g,
                    BoundaryView b) {
@@ -221,12 +327,20 @@ void kick(Exec& ex, FluidView f, Real dt) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) { f.v[i] += f.a[i] * dt; });
 }
 
-// x += dt v, then the last-resort box; returns how many particles it had to stop.
+// x += dt v, then the last-resort box; returns how many particles it had to stop. With travel
+// (a coupling hook's limits, DriftLimits in sph/solver.h) the displacement relative to the
+// surface a particle's ray hit is scaled: x += dt (s + travel (v - s)), s = surface_v or 0.
 template <class Exec>
-int drift(Exec& ex, const SphParams P, FluidView f, Real dt) {
+int drift(Exec& ex, const SphParams P, FluidView f, Real dt, const Real* travel = nullptr,
+          const Vec3* surface_v = nullptr) {
   const double clamped = reduce_sum(ex, f.n, [=] SPHFEM_LAMBDA(int i) -> double {
-    Vec3 x = f.x[i] + f.v[i] * dt;
     Vec3 v = f.v[i];
+    Vec3 step = v;
+    if (travel) {
+      const Vec3 s = surface_v ? surface_v[i] : Vec3();
+      step = s + (v - s) * travel[i];
+    }
+    Vec3 x = f.x[i] + step * dt;
     int hit = 0;
     for (int c = 0; c < 3; ++c) {
       if (x[c] < P.clamp_lo[c]) {
@@ -261,6 +375,12 @@ constexpr Real kDfsphOmega = Real(0.5);
 constexpr Real kDfsphMemory = Real(0.05);
 constexpr Real kDfsphWarmSmoothing = Real(0.3);  // per step, dfsph_smooth_warm
 
+// Coefficient of grad W_ib in a DFSPH velocity update of particle i from wall sample b.
+SPHFEM_HD Real dfsph_wall_pair(const SphParams& P, const BoundaryView& b, std::uint32_t j,
+                               Real kappa_i, Real kappa_b) {
+  return (b.psi[j] / P.rho0) * kappa_i + P.volume * kappa_b;
+}
+
 // One projected, relaxed Jacobi update (Bender & Koschier 2017, eqs. 9 and 12, with omega).
 // The pressure may only push: kappa_sum + kappa >= 0, compression where kappa_sum > 0 must
 // vanish and expansion is free where kappa_sum = 0 (a complementarity problem); the
@@ -282,17 +402,20 @@ SPHFEM_HD Real dfsph_update(Real err, Real alpha, Real kappa_sum, Real dt, Real&
 // a full step (pos_rate = dt / CFL step): a short step that lands on an output time would
 // otherwise turn it into a huge velocity. Returns the summed residual.
 template <class Exec>
-double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g,
-                    const BoundaryView b, Real dt, Real pos_rate, bool divergence) {
+double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w,
+                    Real dt, Real pos_rate, bool divergence) {
   return reduce_sum(ex, f.n, [=] SPHFEM_LAMBDA(int i) -> double {
     const Vec3 xi = f.x[i], vi = f.v[i];
     Real d = 0;
     for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
       d += P.volume * dot(vi - f.v[j], P.kernel.grad(r, std::sqrt(r2)));
     });
-    for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      d += (b.psi[j] / P.rho0) * dot(vi, P.kernel.grad(r, std::sqrt(r2)));
-    });
+    for_wall_samples(
+        w, xi, P.h2, [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
+          d += (b.psi[j] / P.rho0) * dot(relative_to(b, j, vi), P.kernel.grad(r, std::sqrt(r2)));
+        });
+    NearSurface s;
+    if (near_surface(w.surface, i, s)) d -= s.slope * dot(vi - s.vs, s.n);
     Real err = divergence ? d * dt : (f.rho[i] / P.rho0 - Real(1)) * pos_rate + dt * d;
     if (divergence && !f.full[i] && err > Real(0)) err = Real(0);
     return double(dfsph_update(err, f.alpha[i], f.kappa_sum[i], dt, f.kappa[i]));
@@ -317,8 +440,10 @@ double wall_source(Exec& ex, const SphParams P, const FluidView f, const GridVie
       return 0.0;
     }
     Real d = 0;
+    const Vec3 vb = b.v ? b.v[k] : Vec3();
     for_neighbors(g, f.x, b.x[k], P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      d -= P.volume * dot(f.v[j], P.kernel.grad(r, std::sqrt(r2)));
+      const Vec3 vj = b.v ? f.v[j] - vb : f.v[j];
+      d -= P.volume * dot(vj, P.kernel.grad(r, std::sqrt(r2)));
     });
     Real err = divergence ? d * dt : (b.rho[k] / P.rho0 - Real(1)) * pos_rate + dt * d;
     if (divergence && !b.full[k] && err > Real(0)) err = Real(0);
@@ -377,7 +502,7 @@ int wall_density(Exec& ex, const SphParams P, const FluidView f, const GridView 
 // the pressure; the filter lets it decay while the smooth hydrostatic part passes unchanged.
 template <class Exec>
 void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const GridView g,
-                       const BoundaryView b, Real* out) {
+                       const Walls w, Real* out) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
     Real sw = 0, sk = 0;
@@ -386,19 +511,22 @@ void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const Gri
       sw += w;
       sk += w * f.warm_dens[j];
     });
-    for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3&, Real r2) {
-      const Real w = P.kernel.W(std::sqrt(r2));
-      sw += w;
-      sk += w * b.warm_dens[j];
-    });
+    for_wall_samples(w, xi, P.h2,
+                     [&](const BoundaryView& b, std::uint32_t j, const Vec3&, Real r2) {
+                       const Real wk = P.kernel.W(std::sqrt(r2));
+                       sw += wk;
+                       sk += wk * b.warm_dens[j];
+                     });
     const Real own = f.warm_dens[i];
     out[i] = own + kDfsphWarmSmoothing * (sk / sw - own);
   });
 }
 
-// Density of the walls alone at each sample and the samples in reach; once, they do not move.
+// Density of the walls alone at each sample and the samples in reach; once for the tank
+// (share 1), every step for moving samples (share kMovingRestShare).
 template <class Exec>
-void wall_rest(Exec& ex, const SphParams P, Real* rest, int* nb_rest, const BoundaryView b) {
+void wall_rest(Exec& ex, const SphParams P, Real* rest, int* nb_rest, const BoundaryView b,
+               Real share = Real(1)) {
   parallel_for(ex, b.n, [=] SPHFEM_LAMBDA(int k) {
     Real sum = 0;
     int count = 0;
@@ -406,7 +534,7 @@ void wall_rest(Exec& ex, const SphParams P, Real* rest, int* nb_rest, const Boun
       sum += b.psi[j] * P.kernel.W(std::sqrt(r2));
       ++count;
     });
-    rest[k] = sum;
+    rest[k] = share * sum;
     nb_rest[k] = count;
   });
 }
@@ -415,11 +543,15 @@ void wall_rest(Exec& ex, const SphParams P, Real* rest, int* nb_rest, const Boun
 // kappa has units of pressure / density (an acceleration potential), so it carries over
 // unchanged when dt changes.
 template <class Exec>
-void dfsph_warm_start(Exec& ex, FluidView f, const BoundaryView b, bool divergence) {
+void dfsph_warm_start(Exec& ex, FluidView f, bool divergence) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     f.kappa[i] = divergence ? f.warm_div[i] : f.warm_dens[i];
     f.kappa_sum[i] = Real(0);
   });
+}
+
+template <class Exec>
+void wall_warm_start(Exec& ex, const BoundaryView b, bool divergence) {
   parallel_for(ex, b.n, [=] SPHFEM_LAMBDA(int k) {
     b.kappa[k] = divergence ? b.warm_div[k] : b.warm_dens[k];
     b.kappa_sum[k] = Real(0);
@@ -438,9 +570,11 @@ void dfsph_remember(Exec& ex, FluidView f, Real weight, bool divergence) {
 
 // v_i -= dt (sum_j V (kappa_i + kappa_j) grad W_ij + sum_b (psi_b / rho0 kappa_i +
 // V kappa_b) grad W_ib); the sweep's stiffness joins the sums, and the fluid's the pressure
-// p_i = rho_i^2 / rho0 kappa_i (gauges, output).
+// p_i = rho_i^2 / rho0 kappa_i (gauges, output). A surface without samples adds
+// kappa_i Phi'(d) n, the transpose of its term in the density change (dfsph_source), so the
+// update stays a projection; it carries no stiffness of its own (wall_accumulate).
 template <class Exec>
-void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, BoundaryView b,
+void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w,
                  Real dt) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
@@ -450,14 +584,22 @@ void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, Bou
       const Real k = ki + f.kappa[j];
       if (k != Real(0)) dv += P.kernel.grad(r, std::sqrt(r2)) * (P.volume * k);
     });
-    for_neighbors(b.grid, b.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      const Real k = (b.psi[j] / P.rho0) * ki + P.volume * b.kappa[j];
-      if (k != Real(0)) dv += P.kernel.grad(r, std::sqrt(r2)) * k;
-    });
+    for_wall_samples(w, xi, P.h2,
+                     [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
+                       const Real k = dfsph_wall_pair(P, b, j, ki, b.kappa[j]);
+                       if (k != Real(0)) dv += P.kernel.grad(r, std::sqrt(r2)) * k;
+                     });
+    NearSurface s;
+    if (near_surface(w.surface, i, s)) dv -= s.n * (s.slope * ki);
     f.v[i] -= dv * dt;
     f.kappa_sum[i] += ki;
     f.p[i] += ki * f.rho[i] * f.rho[i] / P.rho0;
   });
+}
+
+// After a sweep: the samples' stiffness joins their sums.
+template <class Exec>
+void wall_accumulate(Exec& ex, const BoundaryView b) {
   parallel_for(ex, b.n, [=] SPHFEM_LAMBDA(int k) { b.kappa_sum[k] += b.kappa[k]; });
 }
 

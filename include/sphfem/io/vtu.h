@@ -16,4 +16,9 @@ void write_vtu(const std::string& path, const PointSet& frame);
 // Throws std::runtime_error naming the path when the file is not in that form.
 PointSet read_vtu_points(const std::string& path);
 
+// Reads the whole frame back: points, point arrays, cells (connectivity, offsets, types) and
+// cell arrays; a point cloud's vertex cells read back as no cells. Throws like
+// read_vtu_points, and also when the cells do not index the points.
+PointSet read_vtu(const std::string& path);
+
 }  // namespace sphfem::io

@@ -38,6 +38,6 @@ Projection project(const Camera& cam, const Vec3d& world);
 
 // Frames the box [lo, hi] (y up) from the front (+z side, looking along -z), above and a little
 // to the side, close enough that the whole box fills the picture with a small margin.
-Camera auto_frame(const Vec3d& lo, const Vec3d& hi, int width, int height);
+Camera auto_frame(const Vec3d& lo, const Vec3d& hi, int width, int height, double fov_y_deg = 35.0);
 
 }  // namespace sphfem::render

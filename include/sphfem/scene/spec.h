@@ -16,55 +16,55 @@ enum class SolverKind { WCSPH, DFSPH };
 enum class KernelKind { CubicSpline, WendlandC2 };
 
 struct SimulationSpec {
-  double duration = 1.0;              // s, simulated time
-  double dt_min = 1e-6;               // s, below this the run stops as unstable
-  double dt_max = 2e-3;               // s, upper bound of the adaptive step
-  double cfl = 0.4;                   // Courant number on the particle spacing
+  double duration = 1.0;  // s, simulated time
+  double dt_min = 1e-6;   // s, below this the run stops as unstable
+  double dt_max = 2e-3;   // s, upper bound of the adaptive step
+  double cfl = 0.4;       // Courant number on the particle spacing
   SolverKind solver = SolverKind::DFSPH;
-  Vec3d gravity{0.0, -9.81, 0.0};     // m/s^2
-  double density_tolerance = 1e-3;    // DFSPH: mean relative density error target
-  double divergence_tolerance = 1e-3; // DFSPH: mean relative density change per step from div v
-  int max_iterations = 100;           // DFSPH: cap on pressure iterations per solve
+  Vec3d gravity{0.0, -9.81, 0.0};      // m/s^2
+  double density_tolerance = 1e-3;     // DFSPH: mean relative density error target
+  double divergence_tolerance = 1e-3;  // DFSPH: mean relative density change per step from div v
+  int max_iterations = 100;            // DFSPH: cap on pressure iterations per solve
 };
 
 struct FluidBlockSpec {
-  Vec3d lo, hi;        // m, box filled with particles on a cubic lattice
-  Vec3d velocity;      // m/s, initial velocity
+  Vec3d lo, hi;    // m, box filled with particles on a cubic lattice
+  Vec3d velocity;  // m/s, initial velocity
 };
 
 struct EmitterSpec {
-  Vec3d position;      // m, nozzle centre
+  Vec3d position;                   // m, nozzle centre
   Vec3d direction{0.0, -1.0, 0.0};  // unit after loading
-  double radius = 0.05;  // m, nozzle radius
-  double speed = 1.0;    // m/s, outflow speed
-  double start = 0.0;    // s
-  double end = 1e30;     // s
+  double radius = 0.05;             // m, nozzle radius
+  double speed = 1.0;               // m/s, outflow speed
+  double start = 0.0;               // s
+  double end = 1e30;                // s
 };
 
 struct FluidSpec {
-  double particle_radius = 0.0125;  // m; lattice spacing is twice this
-  double rest_density = 1000.0;     // kg/m^3
-  double viscosity = 1e-6;          // m^2/s, physical kinematic viscosity
-  double xsph = 0.0;                // XSPH velocity smoothing factor, 0..1
-  double artificial_viscosity = 0.0;// Monaghan alpha, 0 = off
-  double stiffness = 0.0;           // Pa, WCSPH p = k (rho/rho0 - 1); 0 = derive from max speed
-  double max_speed = 0.0;           // m/s, expected speed for deriving stiffness (0 = from heights)
+  double particle_radius = 0.0125;    // m; lattice spacing is twice this
+  double rest_density = 1000.0;       // kg/m^3
+  double viscosity = 1e-6;            // m^2/s, physical kinematic viscosity
+  double xsph = 0.0;                  // XSPH velocity smoothing factor, 0..1
+  double artificial_viscosity = 0.0;  // Monaghan alpha, 0 = off
+  double stiffness = 0.0;             // Pa, WCSPH p = k (rho/rho0 - 1); 0 = derive from max speed
+  double max_speed = 0.0;  // m/s, expected speed for deriving stiffness (0 = from heights)
   KernelKind kernel = KernelKind::CubicSpline;
   std::vector<FluidBlockSpec> blocks;
   std::vector<EmitterSpec> emitters;
-  int max_particles = 0;            // capacity for emitters; 0 = estimate from emitters
+  int max_particles = 0;  // capacity for emitters; 0 = estimate from emitters
 };
 
 struct DomainSpec {
   Vec3d lo{0.0, 0.0, 0.0};  // m, inner corner of the tank
   Vec3d hi{1.0, 1.0, 1.0};  // m
-  bool open_top = false;     // no lid: particles above hi.y are still clamped to the domain
+  bool open_top = false;    // no lid: particles above hi.y are still clamped to the domain
 };
 
 struct OutputSpec {
-  double fps = 30.0;        // frames per simulated second
-  bool vtu = true;          // VTK XML unstructured grid frames (ParaView)
-  bool ply = false;         // binary PLY point frames (Houdini, MeshLab)
+  double fps = 30.0;  // frames per simulated second
+  bool vtu = true;    // VTK XML unstructured grid frames (ParaView)
+  bool ply = false;   // binary PLY point frames (Houdini, MeshLab)
 };
 
 enum class GaugeKind { Pressure, Height, Node };
@@ -91,24 +91,24 @@ struct PinSpec {
 struct BodySpec {
   std::string name;
   BodyShape shape = BodyShape::Box;
-  Vec3d position;               // m: centre (box, sphere, cloth) or centre of the base (tube, cup)
-  Vec3d size{0.1, 0.1, 0.1};    // m: box edges; cloth extents along x and z
-  double radius = 0.05;         // m: sphere; outer radius of tube and cup
-  double inner_radius = 0.04;   // m: tube and cup
-  double length = 0.2;          // m: tube, along +y
-  double height = 0.1;          // m: cup, along +y
-  double thickness = 0.01;      // m: cloth (along y); cup bottom
-  int resolution = 8;           // cells across the largest extent
-  std::string file;             // mesh: relative to the scene file's folder
-  double scale = 1.0;           // mesh: x -> scale x + offset
-  Vec3d offset;                 // m, mesh
+  Vec3d position;              // m: centre (box, sphere, cloth) or centre of the base (tube, cup)
+  Vec3d size{0.1, 0.1, 0.1};   // m: box edges; cloth extents along x and z
+  double radius = 0.05;        // m: sphere; outer radius of tube and cup
+  double inner_radius = 0.04;  // m: tube and cup
+  double length = 0.2;         // m: tube, along +y
+  double height = 0.1;         // m: cup, along +y
+  double thickness = 0.01;     // m: cloth (along y); cup bottom
+  int resolution = 8;          // cells across the largest extent
+  std::string file;            // mesh: relative to the scene file's folder
+  double scale = 1.0;          // mesh: x -> scale x + offset
+  Vec3d offset;                // m, mesh
   double max_volume = TetgenOptions{}.max_volume;  // m^3, surface meshes: TetGen "a"
   double quality = TetgenOptions{}.quality;        // surface meshes: TetGen "q"
   Material material;
-  Vec3d velocity;               // m/s, initial velocity of the free nodes
+  Vec3d velocity;  // m/s, initial velocity of the free nodes
   PinSpec pinned;
-  double restitution = 0.0;     // fluid contact: share of the normal relative velocity reversed
-  double slip = 1.0;            // fluid contact: share of the tangential relative velocity kept
+  double restitution = 0.0;  // fluid contact: share of the normal relative velocity reversed
+  double slip = 1.0;         // fluid contact: share of the tangential relative velocity kept
 };
 
 // Settings of the FEM solve shared by all bodies; defaults are the solver's own.
@@ -125,11 +125,11 @@ enum class CouplingMethod { RayTraced, BoundaryParticles };
 // How the fluid and the bodies exchange momentum (paper §3.3-4 and its baseline).
 struct CouplingSpec {
   CouplingMethod method = CouplingMethod::RayTraced;
-  double skin = 0.25;                 // fraction of the particle radius kept off a surface
-  bool near_surface_density = true;   // add the kernel mass missing beyond a body's surface
-  bool tank_rays = true;              // the tank's faces join the ray cast as static colliders
-  double rebuild_quality = 2.0;       // rebuild a BVH when its box area grows by this factor
-  double wall_restitution = 0.0;      // the tank's faces (static colliders)
+  double skin = 0.25;                // fraction of the particle radius kept off a surface
+  bool near_surface_density = true;  // add the kernel mass missing beyond a body's surface
+  bool tank_rays = true;             // the tank's faces join the ray cast as static colliders
+  double rebuild_quality = 2.0;      // rebuild a BVH when its box area grows by this factor
+  double wall_restitution = 0.0;     // the tank's faces (static colliders)
   double wall_slip = 1.0;
 };
 

@@ -11,11 +11,11 @@
 namespace sphfem {
 
 struct RunOptions {
-  std::string out_dir;       // created if missing; frames/ and gauges.csv go inside
+  std::string out_dir;  // created if missing; frames/ and gauges.csv go inside
   Backend backend = Backend::Cpu;
-  int threads = 0;           // CPU threads, 0 = all cores
-  double duration = -1;      // s, overrides simulation.duration when >= 0
-  bool progress = true;      // progress line on stderr
+  int threads = 0;       // CPU threads, 0 = all cores
+  double duration = -1;  // s, overrides simulation.duration when >= 0
+  bool progress = true;  // progress line on stderr
 };
 
 struct RunSummary {
@@ -24,6 +24,8 @@ struct RunSummary {
   int frames = 0;
   int particles = 0;
   int bodies = 0, body_nodes = 0;
+  long crossed = 0;     // particles that crossed a body surface, summed over the run
+  long inside_max = 0;  // most particles inside a body at any frame
   double sim_seconds = 0;
   double wall_seconds = 0;
 };

@@ -1,0 +1,178 @@
+// `sphfem bench --paper`: the paper's Table 1 workload for each of its scenes
+// (scenes/paper/*.json): the scene's body with 65,535 particles falling onto it as one block,
+// measured once the block has reached the body. Prints FEM, SPH and coupling ms per step
+// beside the paper's own numbers, with the leak counts.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "bench.h"
+#include "sphfem/io/atomic_file.h"
+#include "sphfem/scene/load.h"
+#include "sphfem/sim/simulation.h"
+
+namespace {
+
+using namespace sphfem;
+namespace fs = std::filesystem;
+
+// Table 1 of the reference paper (NVIDIA Quadro 6000): elements, FEM, SPH, coupling ms.
+struct PaperRow {
+  const char* scene;
+  const char* label;
+  double elements, fem, sph, coupling;
+};
+constexpr PaperRow kPaper[] = {{"cloth", "Cloth", 1.9e3, 11.5, 17.9, 8.0},
+                               {"cup", "Cup", 2.1e3, 11.9, 17.9, 8.1},
+                               {"tube_hd_hk", "Tube", 6.4e3, 12.0, 17.9, 8.3},
+                               {"bunny", "Bunny", 22.0e3, 25.6, 17.9, 26.6},
+                               {"dragon", "Dragon", 34.2e3, 36.4, 17.9, 41.8}};
+
+// The scene with its emitters replaced by a block of particles above the body.
+SceneSpec table1_scene(SceneSpec s) {
+  s.fluid.emitters.clear();
+  const double d = 2 * s.fluid.particle_radius;
+  // 45 x 32 x 45 = 64,800 particles: the lattice box nearest the paper's 65,535.
+  const int nx = 45, ny = 32, nz = 45;
+  const Vec3d c = 0.5 * (s.domain.lo + s.domain.hi);
+  double top = s.domain.lo.y;
+  for (const BodySpec& b : s.bodies) {
+    double h = b.position.y + b.size.y * 0.5;
+    if (b.shape == BodyShape::Tube) h = b.position.y + b.length;
+    if (b.shape == BodyShape::Cup) h = b.position.y + b.height;
+    if (b.shape == BodyShape::Cloth) h = b.position.y + b.thickness;
+    if (b.shape == BodyShape::Mesh) h = b.offset.y + 0.25;
+    top = std::max(top, h);
+  }
+  FluidBlockSpec blk;
+  blk.lo = Vec3d(c.x - 0.5 * nx * d, top + 0.02, c.z - 0.5 * nz * d);
+  blk.hi = Vec3d(c.x + 0.5 * nx * d, top + 0.02 + ny * d, c.z + 0.5 * nz * d);
+  s.fluid.blocks = {blk};
+  s.fluid.max_particles = 0;
+  s.domain.hi.y = std::max(s.domain.hi.y, blk.hi.y + 2 * d);
+  return s;
+}
+
+struct Measured {
+  int particles = 0, elements = 0;
+  double fem = 0, sph = 0, coupling = 0, total = 0, leak_check = 0;
+  long crossed = 0, inside = 0;
+  double contacts = 0;
+};
+
+Measured measure(const SceneSpec& scene, Backend backend, int steps) {
+  Simulation sim(scene, backend);
+  FluidSolver* f = sim.fluid();
+  RayCoupling* hook = sim.coupling();
+  // Until the block's front reaches the body: about 0.02 m of fall plus a little.
+  const double fall = std::sqrt(2 * 0.03 / 9.81) + 0.03;
+  while (sim.time() < fall) sim.step(scene.simulation.dt_max);
+  f->reset_profile();
+  if (sim.bodies()) sim.bodies()->reset_profile();
+  if (hook) hook->reset_stats();
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < steps; ++i) sim.step(scene.simulation.dt_max);
+  Measured m;
+  m.total =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
+      steps;
+  const Profile& p = f->profile();
+  double in_hook = 0;
+  for (int k = 0; k < int(Phase::Count); ++k) {
+    if (Phase(k) == Phase::Coupling)
+      in_hook = p.ms[k];
+    else
+      m.sph += p.ms[k];
+  }
+  m.sph /= steps;
+  if (hook) {
+    const RayCouplingStats& s = hook->stats();
+    m.fem = s.ms_fem / steps;
+    m.leak_check = s.ms_leak_check / steps;
+    m.coupling = std::max(0.0, in_hook / steps - m.fem - m.leak_check);
+    m.crossed = s.crossed;
+    m.contacts = double(s.contacts) / steps;
+  } else if (sim.bodies()) {
+    m.fem = sim.bodies()->profile().ms_total() / steps;
+    m.coupling = in_hook / steps;
+  }
+  m.total -= m.leak_check;  // a measurement, not part of the method
+  m.particles = f->count();
+  m.elements = sim.bodies() ? sim.bodies_model().elements : 0;
+  m.inside = sim.count_inside();
+  return m;
+}
+
+}  // namespace
+
+int run_paper_bench(const BenchOptions& opt) {
+  if (opt.threads > 0) set_cpu_threads(opt.threads);
+  const Backend backend = opt.backend == "cuda" ? Backend::Cuda : Backend::Cpu;
+  const std::string dir = opt.scenes.empty() ? "scenes/paper" : opt.scenes;
+  std::time_t now = std::time(nullptr);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
+  const std::string device = backend == Backend::Cpu ? cpu_model() : "CUDA device";
+  std::printf("paper Table 1 on %s, %d threads, %s backend, %d steps after the block lands\n",
+              device.c_str(), cpu_threads(), opt.backend.c_str(), opt.steps);
+  std::printf("%-8s %-19s %8s %9s | %7s %7s %8s %7s | %7s %7s %8s %7s | %6s %6s\n", "scene",
+              "method", "elements", "particles", "FEM", "SPH", "coupling", "total", "paper", "SPH",
+              "coupling", "total", "leaks", "hits");
+  std::string csv;
+  char line[1024];
+  for (const PaperRow& row : kPaper) {
+    const std::string path = dir + "/" + row.scene + ".json";
+    SceneSpec base;
+    try {
+      base = load_scene(path);
+    } catch (const std::exception& e) {
+      std::printf("%-8s skipped: %s\n", row.label, e.what());
+      continue;
+    }
+    for (const char* method : {"raytraced", "boundary_particles"}) {
+      if (opt.method != "both" && opt.method != method) continue;
+      SceneSpec s = table1_scene(base);
+      s.coupling.method = std::string(method) == "raytraced" ? CouplingMethod::RayTraced
+                                                             : CouplingMethod::BoundaryParticles;
+      Measured m;
+      try {
+        m = measure(s, backend, opt.steps);
+      } catch (const std::exception& e) {
+        std::printf("%-8s %-19s failed: %s\n", row.label, method, e.what());
+        continue;
+      }
+      const double paper_total = row.fem + row.sph + row.coupling;
+      std::printf(
+          "%-8s %-19s %8d %9d | %7.2f %7.2f %8.2f %7.2f | %7.1f %7.1f %8.1f %7.1f | %6ld %6.0f\n",
+          row.label, method, m.elements, m.particles, m.fem, m.sph, m.coupling, m.total, row.fem,
+          row.sph, row.coupling, paper_total, m.crossed + m.inside, m.contacts);
+      std::snprintf(
+          line, sizeof line,
+          "%s,\"%s\",%d,%s,%s,%s,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%ld,%ld,%.0f,%.1f,%.1f,"
+          "%.1f,%.1f\n",
+          date, device.c_str(), cpu_threads(), opt.backend.c_str(), row.scene, method, m.elements,
+          m.particles, opt.steps, m.fem, m.sph, m.coupling, m.total, m.leak_check, m.crossed,
+          m.inside, m.contacts, row.fem, row.sph, row.coupling, paper_total);
+      csv += line;
+    }
+  }
+  if (!opt.out_dir.empty()) {
+    io::ensure_directory(opt.out_dir);
+    const std::string path = opt.out_dir + "/paper_table1.csv";
+    const bool fresh = !fs::exists(path);
+    std::ofstream f(path, std::ios::app);
+    if (fresh)
+      f << "date,device,threads,backend,scene,method,elements,particles,steps,ms_fem,ms_sph,"
+           "ms_coupling,ms_total,ms_leak_check,crossed,inside,contacts,paper_fem,paper_sph,"
+           "paper_coupling,paper_total\n";
+    f << csv;
+    std::printf("\nresults appended to %s\n", path.c_str());
+  }
+  return 0;
+}

@@ -1,0 +1,61 @@
+// The paper's ray-traced two-way coupling as one fluid StepHook: inside each fluid step the
+// bodies take the same dt, their surface BVH is refit over the step, every particle casts one
+// ray along its motion relative to the surfaces (bodies and, optionally, the tank's faces as
+// static colliders), the drift stops a skin short of the nearest hit (eq. 6), and after the
+// drift the Coupler exchanges impulses per face. A second cast of each particle's actual
+// relative displacement finds the particles that crossed a surface anyway (another face than
+// the nearest one), puts them back and counts what still crosses (`crossed`), so leakage is
+// measured every step rather than assumed away.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "sphfem/core/backend.h"
+#include "sphfem/couple/impulse.h"
+#include "sphfem/fem/solver.h"
+#include "sphfem/sph/solver.h"
+
+namespace sphfem {
+
+// The bodies' step inside the fluid step failed (non-finite solve); the runner reports it.
+struct BodyStepError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct RayCouplingSettings {
+  Real skin = 0;  // m, kept between a particle and the surface it hits
+  bool tank = true;
+  Vec3 tank_lo, tank_hi;  // the tank's inner faces
+  bool open_top = false;  // no lid among the tank's faces
+  ContactCoeffs wall;
+  std::vector<ContactCoeffs> body;  // one per body of the BodySolver's model
+  double rebuild_quality = 2.0;     // rebuild the bodies' BVH above this quality ratio
+};
+
+// Sums since the last reset_stats().
+struct RayCouplingStats {
+  long steps = 0;
+  long contacts = 0;   // particle-face hits that went to the coupler
+  long crossed = 0;    // particles whose displacement crossed a body surface (goal: 0)
+  long corrected = 0;  // crossings found by the re-cast and put back in front of the face
+  int rebuilds = 0;
+  double ms_fem = 0, ms_collide = 0, ms_couple = 0, ms_leak_check = 0;
+  BodyStepInfo last_body_step;
+  std::vector<Vec3d> body_impulse;  // N s given to each body by the fluid
+};
+
+class RayCoupling : public StepHook {
+ public:
+  virtual const RayCouplingStats& stats() const = 0;
+  virtual void reset_stats() = 0;
+};
+
+// bodies may be null (tank faces only). Throws std::runtime_error when the backend is not
+// usable here.
+std::unique_ptr<RayCoupling> make_ray_coupling(const RayCouplingSettings& settings,
+                                               BodySolver* bodies, Backend backend);
+
+}  // namespace sphfem

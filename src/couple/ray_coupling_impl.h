@@ -1,0 +1,288 @@
+// RayCoupling over one execution backend (include/sphfem/couple/ray_coupling.h). Included
+// once per backend, like the solvers.
+#pragma once
+
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "sphfem/collide/bvh.h"
+#include "sphfem/core/memory.h"
+#include "sphfem/couple/coupler.h"
+#include "sphfem/couple/ray_coupling.h"
+#include "sphfem/fem/model.h"
+
+namespace sphfem {
+
+template <class Exec>
+class RayCouplingT final : public RayCoupling {
+ public:
+  RayCouplingT(const RayCouplingSettings& s, BodySolver* bodies, Backend backend)
+      : set_(s), bodies_(bodies), coupler_(make_coupler(backend)) {
+    const MemSpace sp = Exec::kSpace;
+    for (Buffer<int>* b : {&face_, &tank_face_}) *b = Buffer<int>(sp);
+    for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
+      *b = Buffer<Real>(sp);
+    x_pre_ = Buffer<Vec3>(sp);
+    rel_ = Buffer<Vec3>(sp);
+    vel_ = Buffer<Vec3>(sp);
+    if (bodies_) {
+      const BodyArrays a = bodies_->arrays();
+      if (a.triangles > 0) {
+        x_old_ = Buffer<Vec3>(sp, std::size_t(a.nodes));
+        body_bvh_.build(ex_, a.x, a.surface, a.triangles);
+        body_tris_ = a.triangles;
+      }
+      if (s.body.size() != bodies_->model().bodies.size())
+        throw std::invalid_argument("RayCoupling: one ContactCoeffs per body is needed");
+    }
+    if (s.tank) build_tank();
+    stats_.body_impulse.assign(s.body.size(), Vec3d());
+  }
+
+  const RayCouplingStats& stats() const override { return stats_; }
+  void reset_stats() override {
+    const BodyStepInfo last = stats_.last_body_step;
+    stats_ = RayCouplingStats();
+    stats_.last_body_step = last;
+    stats_.body_impulse.assign(set_.body.size(), Vec3d());
+  }
+
+  DriftLimits before_drift(const FluidArrays& f, double dt) override {
+    ++stats_.steps;
+    auto t0 = Clock::now();
+    if (bodies_) step_bodies(dt);
+    stats_.ms_fem += ms_since(t0);
+
+    t0 = Clock::now();
+    const int n = f.n;
+    grow(n);
+    const Real rdt = Real(dt);
+    const Real skin = set_.skin;
+    if (body_tris_ > 0) {
+      const BodyArrays a = bodies_->arrays();
+      body_bvh_.refit(ex_, x_old_.data(), a.x);
+      if (body_bvh_.quality(ex_) > set_.rebuild_quality) {
+        body_bvh_.rebuild(ex_, a.x);
+        body_bvh_.refit(ex_, x_old_.data(), a.x);
+        ++stats_.rebuilds;
+      }
+      cast_moving(ex_, body_bvh_, x_old_.data(), a.x, n, f.x, f.v, rdt, skin,
+                  SegmentHits{face_.data(), t_.data(), u_.data(), v_.data(), len_.data(), nullptr});
+    } else {
+      fill_no_hit(n);
+    }
+    if (set_.tank) {
+      cast_moving(ex_, tank_bvh_, tank_x_.data(), tank_x_.data(), n, f.x, f.v, rdt, skin,
+                  SegmentHits{tank_face_.data(), tank_t_.data(), tank_u_.data(), tank_v_.data(),
+                              tank_len_.data(), nullptr});
+      merge_tank_hits(n);
+    }
+    exec_sync(ex_);
+    stats_.ms_collide += ms_since(t0);
+
+    t0 = Clock::now();
+    surfaces_ = surfaces();
+    const DriftLimits d = coupler_->travel(hits(), f, surfaces_, skin, dt);
+    // The positions before the drift, for the leak check after it.
+    if (body_tris_ > 0) copy(x_pre_.data(), f.x, n);
+    exec_sync(ex_);
+    stats_.ms_couple += ms_since(t0);
+    return d;
+  }
+
+  void after_drift(const FluidArrays& f, double dt) override {
+    auto t0 = Clock::now();
+    coupler_->push_out(hits(), f, surfaces_, set_.skin);
+    stats_.ms_couple += ms_since(t0);
+    if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, dt);
+    t0 = Clock::now();
+    const CoupleStats cs = coupler_->apply(hits(), f, surfaces_);
+    stats_.contacts += cs.contacts;
+    for (std::size_t b = 0; b < cs.body_impulse.size() && b < stats_.body_impulse.size(); ++b)
+      stats_.body_impulse[b] += cs.body_impulse[b];
+    stats_.ms_couple += ms_since(t0);
+  }
+
+  // Public only because nvcc does not allow device lambdas in private member functions.
+  using Clock = std::chrono::steady_clock;
+  static double ms_since(Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  }
+
+  template <class T>
+  static void grow_buffer(Buffer<T>& b, int n) {
+    if (b.size() < std::size_t(n)) b.resize(std::size_t(n) + std::size_t(n) / 4);
+  }
+
+  void grow(int n) {
+    for (Buffer<int>* b : {&face_, &tank_face_}) grow_buffer(*b, n);
+    for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
+      grow_buffer(*b, n);
+    grow_buffer(x_pre_, n);
+    grow_buffer(rel_, n);
+    grow_buffer(vel_, n);
+  }
+
+  void copy(Vec3* dst, const Vec3* src, int n) {
+    parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) { dst[i] = src[i]; });
+  }
+
+  void step_bodies(double dt) {
+    const BodyArrays a = bodies_->arrays();
+    if (body_tris_ > 0) {
+      copy(x_old_.data(), a.x, a.nodes);
+      exec_sync(ex_);
+    }
+    BodyStepInfo info;
+    try {
+      info = bodies_->step(dt);
+    } catch (const std::runtime_error& e) { throw BodyStepError(e.what()); }
+    if (!std::isfinite(info.cg_residual)) throw BodyStepError("the body solve became non-finite");
+    stats_.last_body_step = info;
+  }
+
+  // The tank's inner faces as a static mesh: 8 corners, 2 triangles a face (no lid when the
+  // top is open).
+  void build_tank() {
+    const Vec3 lo = set_.tank_lo, hi = set_.tank_hi;
+    std::vector<Vec3> c(8);
+    for (int k = 0; k < 8; ++k)
+      c[std::size_t(k)] = Vec3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+    // Quads by corner index (bit 0 = x, bit 1 = y, bit 2 = z).
+    const int quads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
+                             {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+    std::vector<Tri> tris;
+    for (int q = 0; q < 6; ++q) {
+      if (set_.open_top && q == 3) continue;  // y = hi
+      const int* k = quads[q];
+      tris.push_back(Tri{{k[0], k[1], k[2]}});
+      tris.push_back(Tri{{k[0], k[2], k[3]}});
+    }
+    tank_x_ = Buffer<Vec3>(Exec::kSpace, 8);
+    tank_x_.upload(c.data(), 8);
+    tank_tri_ = Buffer<Tri>(Exec::kSpace, tris.size());
+    tank_tri_.upload(tris.data(), tris.size());
+    tank_tris_ = int(tris.size());
+    tank_bvh_.build(ex_, tank_x_.data(), tank_tri_.data(), tank_tris_);
+    tank_bvh_.refit(ex_, tank_x_.data(), tank_x_.data());
+  }
+
+  void fill_no_hit(int n) {
+    int* face = face_.data();
+    parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) { face[i] = -1; });
+  }
+
+  // The nearest of a body hit and a tank hit, compared as fractions of each cast's length
+  // (the two casts measure relative to different surfaces). Tank faces follow the bodies'.
+  void merge_tank_hits(int n) {
+    int* face = face_.data();
+    Real *t = t_.data(), *u = u_.data(), *v = v_.data(), *len = len_.data();
+    const int* tf = tank_face_.data();
+    const Real *tt = tank_t_.data(), *tu = tank_u_.data(), *tv = tank_v_.data();
+    const Real* tl = tank_len_.data();
+    const int offset = body_tris_;
+    parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) {
+      if (tf[i] < 0) return;
+      const Real lt = tl[i] > Real(0) ? tl[i] : Real(1);
+      const Real lb = len[i] > Real(0) ? len[i] : Real(1);
+      if (face[i] >= 0 && t[i] * lt <= tt[i] * lb) return;  // t/lb <= tt/lt
+      face[i] = tf[i] + offset;
+      t[i] = tt[i];
+      u[i] = tu[i];
+      v[i] = tv[i];
+      len[i] = tl[i];
+    });
+  }
+
+  HitArrays hits() const {
+    HitArrays h;
+    h.space = Exec::kSpace;
+    h.face = face_.data();
+    h.t = t_.data();
+    h.u = u_.data();
+    h.v = v_.data();
+    return h;
+  }
+
+  std::vector<CoupleSurface> surfaces() {
+    std::vector<CoupleSurface> s;
+    if (body_tris_ > 0) s.push_back(body_surface(bodies_->arrays(), bodies_->model(), set_.body));
+    if (set_.tank)
+      s.push_back(
+          static_surface(Exec::kSpace, 8, tank_x_.data(), tank_tris_, tank_tri_.data(), set_.wall));
+    return s;
+  }
+
+  // The one ray per particle respects only its nearest face: a particle stopped by the tank,
+  // or carried with one face, can still be crossed by another face moving differently (a
+  // cloth edge beside a wall, a concave corner). So each particle's actual displacement over
+  // the step, relative to the body surfaces, is cast again (no skin); one that went through a
+  // face is put back a skin short of it, as eq. 6 would have, and cast again. The first cast
+  // is the leak check; what still crosses after the last pass is counted in `crossed`.
+  long resolve_crossings(const FluidArrays& f, double dt) {
+    constexpr int kPasses = 4;
+    const int n = f.n;
+    Vec3* vel = vel_.data();
+    Vec3* x = f.x;
+    const Vec3* pre = x_pre_.data();
+    const Real inv_dt = Real(1.0 / dt);
+    const Real skin = set_.skin;
+    const BodyArrays a = bodies_->arrays();
+    int* face = tank_face_.data();  // the coupler is done with the tank's hit buffers
+    Real *t = tank_t_.data(), *len = tank_len_.data();
+    Vec3* rel = rel_.data();
+    long crossed = 0;
+    for (int pass = 0; pass < kPasses; ++pass) {
+      const auto t0 = Clock::now();
+      parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) { vel[i] = (x[i] - pre[i]) * inv_dt; });
+      cast_moving(ex_, body_bvh_, x_old_.data(), a.x, n, pre, vel, Real(dt), Real(0),
+                  SegmentHits{face, t, tank_u_.data(), tank_v_.data(), len, rel});
+      const double c = reduce_sum(ex_, n, [=] SPHFEM_LAMBDA(int i) -> double {
+        return face[i] >= 0 && t[i] < len[i] ? 1.0 : 0.0;
+      });
+      crossed = long(c + 0.5);
+      (pass == 0 ? stats_.ms_leak_check : stats_.ms_couple) += ms_since(t0);
+      if (crossed == 0 || pass == kPasses - 1) break;
+      const auto t1 = Clock::now();
+      // x - pre = s dt + rel (s: the face's velocity at the hit): keep s dt, shorten rel; then,
+      // as push_out does, at least a skin in front of the face's plane on the side it came from.
+      const Vec3* nx = a.x;
+      const Tri* tris = a.surface;
+      const Real* hu = tank_u_.data();
+      const Real* hv = tank_v_.data();
+      parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) {
+        if (face[i] < 0 || !(t[i] < len[i])) return;
+        const Real keep = t[i] > skin ? (t[i] - skin) / len[i] : Real(0);
+        x[i] -= rel[i] * (Real(1) - keep);
+        const Tri tr = tris[face[i]];
+        const Vec3 p0 = nx[tr.v[0]], p1 = nx[tr.v[1]], p2 = nx[tr.v[2]];
+        const Vec3 nrm = couple::face_normal(p0, p1, p2);
+        const Real side = dot(rel[i], nrm) < Real(0) ? Real(1) : Real(-1);
+        const Vec3 c = p0 * (Real(1) - hu[i] - hv[i]) + p1 * hu[i] + p2 * hv[i];
+        const Real d = side * dot(x[i] - c, nrm);
+        if (d < skin) x[i] += nrm * (side * (skin - d));
+      });
+      exec_sync(ex_);
+      stats_.corrected += crossed;
+      stats_.ms_couple += ms_since(t1);
+    }
+    return crossed;
+  }
+
+  RayCouplingSettings set_;
+  BodySolver* bodies_;
+  std::unique_ptr<Coupler> coupler_;
+  Exec ex_;
+  SurfaceBvh<Exec> body_bvh_, tank_bvh_;
+  int body_tris_ = 0, tank_tris_ = 0;
+  Buffer<Vec3> x_old_, tank_x_, x_pre_, vel_, rel_;
+  Buffer<Tri> tank_tri_;
+  Buffer<int> face_, tank_face_;
+  Buffer<Real> t_, u_, v_, len_, tank_t_, tank_u_, tank_v_, tank_len_;
+  std::vector<CoupleSurface> surfaces_;
+  RayCouplingStats stats_;
+};
+
+}  // namespace sphfem
