@@ -358,6 +358,12 @@ const ObjectTable& output_table() {
                   "Frames written per second of simulated time.")
           .boolean("vtu", &OutputSpec::vtu, "Write VTK XML unstructured-grid frames (ParaView).")
           .boolean("ply", &OutputSpec::ply, "Write binary PLY point frames (Houdini, MeshLab).")
+          .vec3("camera_position", &OutputSpec::camera_position, "m",
+                "Where `sphfem render` and `run --render` look from (written to run.json); "
+                "equal to `camera_target` (the default) frames the whole tank automatically.")
+          .vec3("camera_target", &OutputSpec::camera_target, "m", "The point the camera looks at.")
+          .number("camera_fov", &OutputSpec::camera_fov, "degrees", Range().gt(1).lt(170),
+                  "Vertical field of view of the pictures.")
           .build();
   return t;
 }

@@ -219,6 +219,12 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
       {"backend", opt.backend == Backend::Cuda ? "cuda" : "cpu"},
       {"fps", scene.output.fps},
       {"bodies", body_names}};
+  const OutputSpec& o = scene.output;
+  const Vec3d eye = o.camera_position - o.camera_target;
+  if (dot(eye, eye) > 0)
+    info["camera"] = {{"position", {o.camera_position.x, o.camera_position.y, o.camera_position.z}},
+                      {"target", {o.camera_target.x, o.camera_target.y, o.camera_target.z}},
+                      {"fov", o.camera_fov}};
   io::write_file_atomic(opt.out_dir + "/run.json", info.dump(2) + "\n");
 
   const double frame_dt = 1.0 / scene.output.fps;
