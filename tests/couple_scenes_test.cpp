@@ -6,12 +6,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "fem/polar.h"
 #include "sphfem/collide/collider.h"
 #include "sphfem/couple/ray_coupling.h"
 #include "sphfem/fem/solver.h"
@@ -42,22 +42,6 @@ struct Coupled {
     bodies = sim->bodies();
   }
   const BodiesModel& body_model() const { return sim->bodies_model(); }
-  void debug_inside() {
-    FluidSnapshot f;
-    fluid->snapshot(f);
-    BodySnapshot b;
-    bodies->snapshot(b);
-    auto col = make_collider(Backend::Cpu);
-    col->build(b.x, body_model().surface);
-    const auto in = col->inside(f.x);
-    const auto cl = col->closest(f.x, 0.05f);
-    for (int i = 0; i < f.n; ++i)
-      if (in[i])
-        std::printf("t=%.2f inside id %u x %.4f %.4f %.4f v %.3f %.3f %.3f dist %.2e face %d\n",
-                    fluid->time(), f.id[i], f.x[i].x, f.x[i].y, f.x[i].z, f.v[i].x, f.v[i].y,
-                    f.v[i].z, double(cl[i].dist), cl[i].face);
-  }
-
   // Steps to time t, counting leaks every `check` seconds.
   void run_to(double t, double check = 0.1) {
     while (fluid->time() < t - 1e-9) {
@@ -67,7 +51,6 @@ struct Coupled {
       contacts += sim->coupling()->stats().contacts;
       sim->coupling()->reset_stats();
       inside_max = std::max(inside_max, sim->count_inside());
-      if (std::getenv("SPHFEM_DEBUG_LEAKS")) debug_inside();
     }
   }
 };
@@ -143,19 +126,47 @@ TEST(CoupleScenes, WaterPouredOnClothSagsItAndNoStepCrossesIt) {
   EXPECT_GT(sag, 0.01) << "the water should weigh the cloth down";
   EXPECT_GT(c.contacts, 0);
   EXPECT_EQ(c.crossed, 0);
-  // Open: particles still end inside the slab (measured: up to 16 of about 2,800 at a frame,
-  // entering near the flapping edges, where the one-ray test and its re-cast both miss a face
-  // that rotates over the step); DISABLED_NoParticleEndsInsideTheClothSlab asserts the goal.
+  // Open: a few particles still end inside the slab (measured: 5 to 16 of about 2,800 at a
+  // frame), entering through the top faces of the sagging cloth while sliding fast (1-2 m/s)
+  // nearly parallel to them, with no crossing found by the re-cast;
+  // DISABLED_NoParticleEndsInsideTheClothSlab asserts the goal.
   std::printf("cloth: sag %.4f m, at most %ld particles inside the slab\n", sag, c.inside_max);
 }
 
 // Paper Fig. 3: a jet hits a free tube standing on the floor. Low stiffness deforms more (the
 // top ring moves relative to the base), low density is pushed further (the base slides).
 struct TubeResult {
-  double deformation = 0;  // largest change of a node's offset from the base centre, m
-  double push = 0;         // displacement of the base centre along the jet, m
+  // Largest distance of a node from where the best-fitting rigid motion of the rest shape puts
+  // it (Kabsch), m: a tube that tips or turns is not counted as deformed.
+  double deformation = 0;
+  double push = 0;  // displacement of the base centre along the jet, m
   long crossed = 0, inside_max = 0;
 };
+
+// max_i |(x_i - c) - R (X_i - C)| with c, C the centroids and R the rotation of the polar
+// decomposition of sum_i (x_i - c)(X_i - C)^T, which maximises tr(R^T A) (Kabsch).
+double rigid_residual(const std::vector<Vec3>& rest, const std::vector<Vec3>& now) {
+  Vec3d C, c;
+  for (std::size_t i = 0; i < rest.size(); ++i) C += Vec3d(rest[i]), c += Vec3d(now[i]);
+  C = C / double(rest.size());
+  c = c / double(rest.size());
+  M3<double> A = M3<double>::zero();
+  for (std::size_t i = 0; i < rest.size(); ++i) {
+    const Vec3d p = Vec3d(now[i]) - c, q = Vec3d(rest[i]) - C;
+    const double pv[3] = {p.x, p.y, p.z}, qv[3] = {q.x, q.y, q.z};
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) A.m[a][b] += pv[a] * qv[b];
+  }
+  const M3<double> R = fem::extract_rotation_fresh(A, Q4<double>::identity(), 100).matrix();
+  double worst = 0;
+  for (std::size_t i = 0; i < rest.size(); ++i) {
+    const V3<double> q(rest[i].x - C.x, rest[i].y - C.y, rest[i].z - C.z);
+    const V3<double> rq = R * q;
+    const Vec3d d = Vec3d(now[i]) - c - Vec3d(rq.x, rq.y, rq.z);
+    worst = std::max(worst, std::sqrt(dot(d, d)));
+  }
+  return worst;
+}
 
 TubeResult run_tube(double rho, double young) {
   Coupled c(json{{"simulation", {{"solver", "dfsph"}, {"dt_max", 0.002}}},
@@ -165,8 +176,8 @@ TubeResult run_tube(double rho, double young) {
                    {"emitters",
                     {{{"position", {0.06, 0.2, 0.2}},
                       {"direction", {1, -0.2, 0}},
-                      {"radius", 0.02},
-                      {"speed", 2.5},
+                      {"radius", 0.015},
+                      {"speed", 1.5},
                       {"end", 0.8}}}}}},
                  {"fem", {{"friction", 0.3}}},
                  {"domain", {{"min", {0, 0, 0}}, {"max", {0.5, 0.35, 0.4}}}},
@@ -196,10 +207,7 @@ TubeResult run_tube(double rho, double young) {
     c.bodies->snapshot(b);
     const Vec3d ct = base_centre(b.x);
     r.push = std::max(r.push, ct.x - c0.x);
-    for (std::size_t i = 0; i < x0.size(); ++i) {
-      const Vec3d d = (Vec3d(b.x[i]) - ct) - (Vec3d(x0[i]) - c0);
-      r.deformation = std::max(r.deformation, std::sqrt(dot(d, d)));
-    }
+    r.deformation = std::max(r.deformation, rigid_residual(x0, b.x));
   }
   r.crossed = c.crossed;
   r.inside_max = c.inside_max;
@@ -239,8 +247,9 @@ TEST(CoupleScenes, DISABLED_NoParticleEndsInsideTheClothSlab) {
   EXPECT_EQ(c.inside_max, 0);
 }
 
-// The goal of the tube scenes, not met yet: a few particles cross the tube's wall where the
-// jet hits it (measured: up to 68 crossings and 16 inside over 1 s, of about 2,600).
+// The goal of the tube scenes, not met yet: with the near-surface density no step crosses the
+// tube's wall, but a particle can still end inside it (measured: at most 1 at a frame, of
+// about 1,000; without the near-surface density and a stronger jet: 68 crossings, 16 inside).
 TEST(CoupleScenes, DISABLED_NoParticleCrossesTheTubes) {
   for (const TubeResult& r :
        {run_tube(1500, 2e6), run_tube(300, 2e6), run_tube(1500, 2e4), run_tube(300, 2e4)}) {
@@ -249,11 +258,12 @@ TEST(CoupleScenes, DISABLED_NoParticleCrossesTheTubes) {
   }
 }
 
-// Paper Fig. 3b/d: the low-density tube is pushed aside by the spray. Not reproduced yet: the
-// measured base displacements are 0.197 m (low density) against 0.188 m (high density) at
-// high stiffness and 0.091 m against 0.058 m at low stiffness, short of the factor 2 asked for.
-// Water reaching under the base (no near-surface density yet) lifts the heavy tube too.
-TEST(CoupleScenes, DISABLED_LowDensityTubeIsPushedFurther) {
+// Paper Fig. 3b/d: the low-density tube is pushed aside by the jet. The jet (about 1.6 N when
+// stopped head-on) is weaker than the floor's friction on the heavy tube (0.3 x 14.5 N) and
+// stronger than on the light one (0.3 x 2.9 N), which also floats once water gathers around
+// it (300 kg/m^3). Measured: 0.193 m against 0.023 m at high stiffness, 0.196 m against
+// 0.064 m at low stiffness (the light tubes reach the tank's wall).
+TEST(CoupleScenes, LowDensityTubeIsPushedFurther) {
   const TubeResult hd_hk = run_tube(1500, 2e6), ld_hk = run_tube(300, 2e6);
   const TubeResult hd_lk = run_tube(1500, 2e4), ld_lk = run_tube(300, 2e4);
   EXPECT_GT(ld_hk.push, 2 * hd_hk.push);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "sphfem/collide/bvh.h"
+#include "sphfem/core/atomic.h"
 #include "sphfem/core/memory.h"
 #include "sphfem/couple/coupler.h"
 #include "sphfem/couple/ray_coupling.h"
@@ -24,6 +25,9 @@ class RayCouplingT final : public RayCoupling {
     for (Buffer<int>* b : {&face_, &tank_face_}) *b = Buffer<int>(sp);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       *b = Buffer<Real>(sp);
+    for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_}) *b = Buffer<Real>(sp);
+    near_face_ = Buffer<int>(sp);
+    for (Buffer<Vec3>* b : {&near_n_, &near_vel_, &near_dv_}) *b = Buffer<Vec3>(sp);
     x_pre_ = Buffer<Vec3>(sp);
     rel_ = Buffer<Vec3>(sp);
     vel_ = Buffer<Vec3>(sp);
@@ -37,7 +41,7 @@ class RayCouplingT final : public RayCoupling {
       if (s.body.size() != bodies_->model().bodies.size())
         throw std::invalid_argument("RayCoupling: one ContactCoeffs per body is needed");
     }
-    if (s.tank) build_tank();
+    if (s.tank && s.rays) build_tank();
     stats_.body_impulse.assign(s.body.size(), Vec3d());
   }
 
@@ -49,11 +53,83 @@ class RayCouplingT final : public RayCoupling {
     stats_.body_impulse.assign(set_.body.size(), Vec3d());
   }
 
+  // The baseline's samples ride on the bodies' surface as it is at the start of the step; the
+  // fluid's impulse on them goes straight into the nodes' impulse array.
+  MovingSurface moving_boundary(const FluidArrays&) override {
+    MovingSurface m;
+    if (set_.rays || body_tris_ == 0) return m;
+    const BodyArrays a = bodies_->arrays();
+    m.space = Exec::kSpace;
+    m.nodes = a.nodes;
+    m.tri = a.surface;
+    m.x = a.x;
+    m.v = a.v;
+    m.impulse = a.impulse;
+    return m;
+  }
+
+  SurfaceProximity proximity(const FluidArrays& f) override {
+    SurfaceProximity p;
+    if (!set_.near_surface || body_tris_ == 0 || f.n == 0) return p;
+    const auto t0 = Clock::now();
+    const int n = f.n;
+    grow(n);
+    const BodyArrays a = bodies_->arrays();
+    body_bvh_.refit(ex_, a.x);
+    int* face = near_face_.data();
+    Real *dist = near_dist_.data(), *u = near_u_.data(), *v = near_v_.data();
+    Vec3 *nrm = near_n_.data(), *vel = near_vel_.data(), *dv = near_dv_.data();
+    int* side = tank_face_.data();  // free until before_drift
+    Vec3* point = rel_.data();      // likewise
+    closest_points(ex_, body_bvh_, a.x, n, f.x, set_.support,
+                   ClosestHits{face, dist, point, side, u, v});
+    const Vec3* px = f.x;
+    const Vec3* nx = a.x;
+    const Vec3* nv = a.v;
+    const Tri* tris = a.surface;
+    const Real tiny = Real(1e-6) * set_.support;
+    parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) {
+      dv[i] = Vec3();
+      nrm[i] = Vec3();
+      if (face[i] < 0) return;
+      // The normal points from the surface to the particle; a particle inside a body (or on
+      // its surface) is pushed out along the outward face normal from the surface itself.
+      const Tri t = tris[face[i]];
+      const Real w0 = Real(1) - u[i] - v[i];
+      Vec3 d = px[i] - point[i];
+      const Real l = norm(d);
+      if (side[i] > 0 && l > tiny) {
+        nrm[i] = d / l;
+      } else {
+        nrm[i] = couple::face_normal(nx[t.v[0]], nx[t.v[1]], nx[t.v[2]]);
+        dist[i] = Real(0);
+      }
+      vel[i] = nv[t.v[0]] * w0 + nv[t.v[1]] * u[i] + nv[t.v[2]] * v[i];
+    });
+    stats_.near_surface +=
+        long(reduce_sum(ex_, n,
+                        [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; }) +
+             0.5);
+    exec_sync(ex_);
+    stats_.ms_collide += ms_since(t0);
+    near_active_ = true;
+    p.dist = dist;
+    p.normal = nrm;
+    p.velocity = vel;
+    p.dv = dv;
+    return p;
+  }
+
   DriftLimits before_drift(const FluidArrays& f, double dt) override {
     ++stats_.steps;
     auto t0 = Clock::now();
-    if (bodies_) step_bodies(dt);
+    if (near_active_) return_surface_pressure(f);
+    if (bodies_) {
+      collect_body_impulse();
+      step_bodies(dt);
+    }
     stats_.ms_fem += ms_since(t0);
+    if (!set_.rays) return baseline_before_drift(f);
 
     t0 = Clock::now();
     const int n = f.n;
@@ -62,12 +138,7 @@ class RayCouplingT final : public RayCoupling {
     const Real skin = set_.skin;
     if (body_tris_ > 0) {
       const BodyArrays a = bodies_->arrays();
-      body_bvh_.refit(ex_, x_old_.data(), a.x);
-      if (body_bvh_.quality(ex_) > set_.rebuild_quality) {
-        body_bvh_.rebuild(ex_, a.x);
-        body_bvh_.refit(ex_, x_old_.data(), a.x);
-        ++stats_.rebuilds;
-      }
+      refit_bodies();
       cast_moving(ex_, body_bvh_, x_old_.data(), a.x, n, f.x, f.v, rdt, skin,
                   SegmentHits{face_.data(), t_.data(), u_.data(), v_.data(), len_.data(), nullptr});
     } else {
@@ -93,19 +164,84 @@ class RayCouplingT final : public RayCoupling {
   }
 
   void after_drift(const FluidArrays& f, double dt) override {
+    if (!set_.rays) {
+      if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, dt, 1);
+      return;
+    }
     auto t0 = Clock::now();
     coupler_->push_out(hits(), f, surfaces_, set_.skin);
     stats_.ms_couple += ms_since(t0);
-    if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, dt);
+    if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, dt, 4);
     t0 = Clock::now();
+    // The impulse lands in the nodes' array; collect_body_impulse counts it per body.
     const CoupleStats cs = coupler_->apply(hits(), f, surfaces_);
     stats_.contacts += cs.contacts;
-    for (std::size_t b = 0; b < cs.body_impulse.size() && b < stats_.body_impulse.size(); ++b)
-      stats_.body_impulse[b] += cs.body_impulse[b];
     stats_.ms_couple += ms_since(t0);
   }
 
   // Public only because nvcc does not allow device lambdas in private member functions.
+
+  // Baseline: no ray and no drift limit; the bodies' BVH follows them for the leak check.
+  DriftLimits baseline_before_drift(const FluidArrays& f) {
+    if (body_tris_ == 0) return DriftLimits();
+    const auto t0 = Clock::now();
+    grow(f.n);
+    refit_bodies();
+    copy(x_pre_.data(), f.x, f.n);
+    exec_sync(ex_);
+    stats_.ms_leak_check += ms_since(t0);
+    return DriftLimits();
+  }
+
+  void refit_bodies() {
+    const BodyArrays a = bodies_->arrays();
+    body_bvh_.refit(ex_, x_old_.data(), a.x);
+    if (body_bvh_.quality(ex_) > set_.rebuild_quality) {
+      body_bvh_.rebuild(ex_, a.x);
+      body_bvh_.refit(ex_, x_old_.data(), a.x);
+      ++stats_.rebuilds;
+    }
+  }
+
+  // The near-surface pressure the fluid felt this step (SurfaceProximity::dv), returned to the
+  // closest face's nodes by the barycentric weights of the closest point.
+  void return_surface_pressure(const FluidArrays& f) {
+    near_active_ = false;
+    const BodyArrays a = bodies_->arrays();
+    const int* face = near_face_.data();
+    const Real *u = near_u_.data(), *v = near_v_.data();
+    const Vec3* dv = near_dv_.data();
+    const Tri* tris = a.surface;
+    Vec3* J = a.impulse;
+    const Real m = f.mass;
+    parallel_for(ex_, f.n, [=] SPHFEM_LAMBDA(int i) {
+      if (face[i] < 0) return;
+      const Vec3 j = dv[i] * (-m);
+      if (j.x == Real(0) && j.y == Real(0) && j.z == Real(0)) return;
+      const Tri t = tris[face[i]];
+      atomic_add(&J[t.v[0]], j * (Real(1) - u[i] - v[i]));
+      atomic_add(&J[t.v[1]], j * u[i]);
+      atomic_add(&J[t.v[2]], j * v[i]);
+    });
+    exec_sync(ex_);
+  }
+
+  // What the fluid gave each body since its last step (rays, samples and near-surface
+  // pressure alike), read from the nodes' impulse array before the step consumes it.
+  void collect_body_impulse() {
+    const BodyArrays a = bodies_->arrays();
+    const std::vector<int>& off = bodies_->model().node_offset;
+    const Vec3* J = a.impulse;
+    for (std::size_t b = 0; b + 1 < off.size() && b < stats_.body_impulse.size(); ++b) {
+      const int first = off[b], count = off[b + 1] - off[b];
+      Vec3d sum;
+      sum.x = reduce_sum(ex_, count, [=] SPHFEM_LAMBDA(int k) -> double { return J[first + k].x; });
+      sum.y = reduce_sum(ex_, count, [=] SPHFEM_LAMBDA(int k) -> double { return J[first + k].y; });
+      sum.z = reduce_sum(ex_, count, [=] SPHFEM_LAMBDA(int k) -> double { return J[first + k].z; });
+      stats_.body_impulse[b] += sum;
+    }
+  }
+
   using Clock = std::chrono::steady_clock;
   static double ms_since(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -120,9 +256,10 @@ class RayCouplingT final : public RayCoupling {
     for (Buffer<int>* b : {&face_, &tank_face_}) grow_buffer(*b, n);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       grow_buffer(*b, n);
-    grow_buffer(x_pre_, n);
-    grow_buffer(rel_, n);
-    grow_buffer(vel_, n);
+    for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_}) grow_buffer(*b, n);
+    grow_buffer(near_face_, n);
+    for (Buffer<Vec3>* b : {&x_pre_, &rel_, &vel_, &near_n_, &near_vel_, &near_dv_})
+      grow_buffer(*b, n);
   }
 
   void copy(Vec3* dst, const Vec3* src, int n) {
@@ -221,8 +358,8 @@ class RayCouplingT final : public RayCoupling {
   // the step, relative to the body surfaces, is cast again (no skin); one that went through a
   // face is put back a skin short of it, as eq. 6 would have, and cast again. The first cast
   // is the leak check; what still crosses after the last pass is counted in `crossed`.
-  long resolve_crossings(const FluidArrays& f, double dt) {
-    constexpr int kPasses = 4;
+  // The baseline (passes = 1) only counts.
+  long resolve_crossings(const FluidArrays& f, double dt, int kPasses) {
     const int n = f.n;
     Vec3* vel = vel_.data();
     Vec3* x = f.x;
@@ -281,6 +418,11 @@ class RayCouplingT final : public RayCoupling {
   Buffer<Tri> tank_tri_;
   Buffer<int> face_, tank_face_;
   Buffer<Real> t_, u_, v_, len_, tank_t_, tank_u_, tank_v_, tank_len_;
+  // Near-surface density: each particle's closest body face this step.
+  Buffer<int> near_face_;
+  Buffer<Real> near_dist_, near_u_, near_v_;
+  Buffer<Vec3> near_n_, near_vel_, near_dv_;
+  bool near_active_ = false;
   std::vector<CoupleSurface> surfaces_;
   RayCouplingStats stats_;
 };

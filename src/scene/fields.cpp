@@ -500,8 +500,8 @@ const ObjectTable& body_table() {
           .object("pinned", &BodySpec::pinned, pinned_table(),
                   "Nodes held in place; see `bodies[].pinned`.")
           .number("restitution", &BodySpec::restitution, "-", kUnit,
-                  "Fluid contact: share of the normal relative velocity reversed. Kept for the "
-                  "fluid coupling; not used yet.")
+                  "Fluid contact (ray-traced coupling): share of the normal relative velocity "
+                  "reversed (0: the fluid stops on the surface, 1: it bounces back elastically).")
           .number("slip", &BodySpec::slip, "-", kUnit,
                   "Fluid contact: share of the tangential relative velocity kept (1 free slip, 0 "
                   "no slip).")
@@ -543,15 +543,18 @@ const ObjectTable& coupling_table() {
           .choice("method", &CouplingSpec::method, {"raytraced", "boundary_particles"},
                   "`raytraced`: each particle's motion is ray-cast against the bodies' surface "
                   "triangles and momentum is exchanged per face with the bodies' `restitution` "
-                  "and `slip`. `boundary_particles`: the baseline, samples on the body "
-                  "surfaces that move with them (Akinci et al. 2012).")
+                  "and `slip`. `boundary_particles`: the baseline, samples a particle spacing "
+                  "apart on the body surfaces that move with them and push the fluid like the "
+                  "tank's samples (Akinci et al. 2012); their forces return to the nodes. "
+                  "Particles may then cross a surface; `crossed` counts them.")
           .number("skin", &CouplingSpec::skin, "-", Range().gt(0).lt(1),
                   "Distance kept between a particle and a surface it hits, as a fraction of "
                   "the particle radius.")
           .boolean("near_surface_density", &CouplingSpec::near_surface_density,
                    "Ray-traced coupling: add the kernel mass missing beyond a body's surface "
                    "(from the distance to the closest point), and its pressure force, so fluid "
-                   "next to a body keeps its rest density.")
+                   "next to a body keeps its rest density; the force goes back to the face's "
+                   "nodes.")
           .boolean("tank_rays", &CouplingSpec::tank_rays,
                    "Ray-cast the tank's six faces too, as static colliders of infinite mass, "
                    "so no particle ever crosses a wall.")

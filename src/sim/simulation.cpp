@@ -10,8 +10,11 @@ namespace sphfem {
 
 RayCouplingSettings ray_coupling_settings(const SceneSpec& scene) {
   RayCouplingSettings cs;
+  cs.rays = scene.coupling.method == CouplingMethod::RayTraced;
+  // The baseline's samples stand for the bodies; the tank keeps its own samples.
+  cs.near_surface = cs.rays && scene.coupling.near_surface_density;
   cs.skin = Real(scene.coupling.skin * scene.fluid.particle_radius);
-  cs.tank = scene.coupling.tank_rays;
+  cs.tank = cs.rays && scene.coupling.tank_rays;
   cs.tank_lo = Vec3(scene.domain.lo);
   cs.tank_hi = Vec3(scene.domain.hi);
   cs.open_top = scene.domain.open_top;
@@ -34,12 +37,20 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
     bodies_model_ = compile_scene_bodies(scene);
     bodies_ = make_body_solver(bodies_model_, backend);
   }
-  // Ray-traced coupling: the bodies step inside the fluid step (the hook); the tank's faces
-  // can join the ray cast even in a scene without bodies.
-  if (fluid_ && scene.coupling.method == CouplingMethod::RayTraced &&
-      (bodies_ || scene.coupling.tank_rays)) {
-    hook_ = make_ray_coupling(ray_coupling_settings(scene), bodies_.get(), backend);
+  // With fluid, the bodies step inside the fluid step (the hook), for either coupling; the
+  // tank's faces can join the ray cast even in a scene without bodies.
+  const bool rays = scene.coupling.method == CouplingMethod::RayTraced;
+  if (fluid_ && (bodies_ || (rays && scene.coupling.tank_rays))) {
+    RayCouplingSettings cs = ray_coupling_settings(scene);
+    cs.near_surface = cs.near_surface && bodies_ != nullptr;
+    cs.support = fluid_model_.params.h;
+    hook_ = make_ray_coupling(cs, bodies_.get(), backend);
     fluid_->set_hook(hook_.get());
+    // The baseline: samples a particle spacing apart on every body surface (Akinci et al.).
+    if (!rays && bodies_)
+      fluid_->set_moving_samples(sample_surface(bodies_model_.x0, bodies_model_.surface,
+                                                double(fluid_model_.params.spacing)),
+                                 bodies_model_.surface, bodies_model_.nodes);
   }
   if (fluid_ && bodies_) inside_check_ = make_collider(Backend::Cpu);
 }

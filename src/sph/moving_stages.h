@@ -8,18 +8,50 @@
 // the nodes then gather their samples' impulses by a fixed list, without atomics.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <vector>
 
 #include "sph/stages.h"
 
 namespace sphfem::stages {
 
-// DFSPH: a moving sample's walls-alone density is this share of what its own layer sums to.
-// A sample of a one-layer surface stands for the solid half-space behind it, and psi makes
-// the layer itself sum to rho0, so half of that is the half-space's share: fluid resting at
-// its lattice distance then fills the other half and the sample's constraint rho_b <= rho0
-// holds with equality, as for the tank's multi-layer samples.
-constexpr Real kMovingRestShare = Real(0.5);
+// DFSPH: a moving sample's walls-alone density is this share of what its own layer sums to
+// (psi makes that rho0), so that its constraint rho_b <= rho0 holds with equality when the
+// fluid rests in front of it, as the tank's multi-layer samples' does. The fluid rests where
+// a lattice particle's density is rho0 with the layer standing in for the lattice below it:
+// at y* with
+//   A(y*) / A(0) = Phi(s / 2),
+// A the plane integral of the kernel (the layer's density profile, psi-weighted) and Phi the
+// half-space of lattice layers (sph/surface_density.h; the lattice below a particle lies
+// beyond a plane s / 2 under it). The fluid then gives the sample rho0 Phi(y* - s / 2), and
+// the sample's share is what is left: y* = 1.10 s and share 0.895 for the cubic spline,
+// 1.08 s and 0.910 for Wendland C2, at h = 2 s. A share of 1/2 (the half-space behind the
+// sample) left the samples at 0.6 rho0 under a resting column, never active: only the
+// fluid's own term psi_b / rho0 kappa_i grad W pushed, half the pair's stiffness (as for a
+// surface without samples, stages::surface_stiffness), and the column's pressure came out
+// 8.5 % off (L2; bottom +15 %). A larger share (0.95, tried before wall_source weighted the
+// samples by psi_b) made the samples' constraint fight the fluid's: the solve blew up.
+//   lattice: half_space_table(kernel, n, s / h, m / (rho0 s^3));
+//   continuum: half_space_table(kernel, n) (its slope row is A); layer = s / h.
+inline Real moving_rest_share(const std::vector<Real>& lattice, const std::vector<Real>& continuum,
+                              int n, double layer) {
+  auto row = [n](const std::vector<Real>& t, int r, double q) {
+    const double u = std::min(std::max(q, 0.0), 1.0) * n;
+    const int k = std::min(int(u), n - 1);
+    const double a = double(t[std::size_t(r) * (n + 1) + k]);
+    const double b = double(t[std::size_t(r) * (n + 1) + k + 1]);
+    return a + (u - k) * (b - a);
+  };
+  const double missing = row(lattice, kHalfPhi, 0.5 * layer);
+  const double a0 = row(continuum, kHalfSlope, 0.0);
+  double lo = 0, hi = 1;  // A decreases from A(0) to 0 at the support
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (row(continuum, kHalfSlope, mid) > missing * a0 ? lo : hi) = mid;
+  }
+  return Real(1.0 - row(lattice, kHalfPhi, 0.5 * (lo + hi) - 0.5 * layer));
+}
 
 // x = sum_c w_c x(node c) of each sample's triangle, v likewise (v null: not computed).
 template <class Exec>
@@ -76,7 +108,7 @@ void sample_force_impulse(Exec& ex, const SphParams P, const FluidView f, const 
 }
 
 // Impulse of a DFSPH solve on each sample: its fluid neighbours changed velocity by
-// -dt sum over sweeps of (psi_b / rho0 kappa_j + V kappa_b) grad W_jb, which is linear in the
+// -dt sum over sweeps of psi_b / rho0 (kappa_j + kappa_b) grad W_jb, which is linear in the
 // stiffness, so the solve's sums give the total. Call after the solve, before the next one.
 template <class Exec>
 void sample_pressure_impulse(Exec& ex, const SphParams P, const FluidView f, const GridView g,

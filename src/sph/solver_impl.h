@@ -55,6 +55,8 @@ class SolverT final : public FluidSolver {
         half_space_table(P_.kernel, kHalfSpaceSteps, layer, lattice_mass);
     half_ = Buffer<Real>(s, half.size());
     half_.upload(half.data(), half.size());
+    moving_share_ = stages::moving_rest_share(half, half_space_table(P_.kernel, kHalfSpaceSteps),
+                                              kHalfSpaceSteps, layer);
     for (const EmitterModel& e : m.emitters) {
       discs_.emplace_back(s, e.disc.size());
       discs_.back().upload(e.disc.data(), e.disc.size());
@@ -308,6 +310,7 @@ class SolverT final : public FluidSolver {
       w.surface.dist = prox_.dist;
       w.surface.normal = prox_.normal;
       w.surface.vel = prox_.velocity;
+      w.surface.dv = prox_.dv;
     }
     w.surface.half.table = half_.data();
     w.surface.half.n = kHalfSpaceSteps;
@@ -344,7 +347,7 @@ class SolverT final : public FluidSolver {
     mactive_ = n;
     const BoundaryView b = moving();
     stages::sample_psi(ex_, P_, b, mpsi_.data());
-    stages::wall_rest(ex_, P_, mrest_.data(), mnb_rest_.data(), b, stages::kMovingRestShare);
+    stages::wall_rest(ex_, P_, mrest_.data(), mnb_rest_.data(), b, moving_share_);
     mimp_.zero();
   }
 
@@ -566,6 +569,7 @@ class SolverT final : public FluidSolver {
   // placed sample (sorted by cell) the wall quantities of BoundaryView and the impulse; the
   // nodes' gather lists.
   int msamples_ = 0, mnodes_ = 0, mactive_ = 0;
+  Real moving_share_ = 1;  // DFSPH walls-alone share of a sample (stages::moving_rest_share)
   MovingSurface moving_;
   Buffer<int> mtri_;
   Buffer<Vec3> mw_, mx_, mv_, mtmpx_, mtmpv_, mimp_;

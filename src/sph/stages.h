@@ -61,6 +61,7 @@ struct SurfaceView {
   const Real* dist = nullptr;  // nullptr: no surfaces
   const Vec3* normal = nullptr;
   const Vec3* vel = nullptr;  // nullptr: at rest
+  Vec3* dv = nullptr;         // nullptr: not recorded; else the surface's pushes are added here
   HalfSpaceView half;
 };
 
@@ -235,6 +236,23 @@ SPHFEM_HD Vec3 surface_pressure(const SphParams& P, const NearSurface& s, Real p
   return s.n * push - gt * (P.rho0 * rho * inv_b2 * s.phi);
 }
 
+// DFSPH push of a surface without samples: the stiffness the tank's samples would carry there
+// (wall_density: the fluid's warm start continued with the hydrostatic head), kappa_b(y) =
+// kappa_i + g . (y - x_i) with kappa_i the particle's warm start, acting as the samples' own
+// term V kappa_b grad W integrated over the half-space:
+//   kappa_i A n - (a (g . n) n + Phi g_t),  normal part >= 0.
+// It is explicit (known before the solve); the solve's kappa_i Phi' n term (dfsph_apply)
+// stays the projection. With that term alone a resting column's bottom layer sank to the
+// skin distance (the surface pushed with half the pair's stiffness) and the layers above it
+// lost their spacing.
+SPHFEM_HD Vec3 surface_stiffness(const SphParams& P, const NearSurface& s, Real kappa) {
+  const Real gn = dot(P.gravity, s.n);
+  const Vec3 gt = P.gravity - s.n * gn;
+  Real push = kappa * s.slope - s.normal2 * gn;
+  if (push < Real(0)) push = Real(0);
+  return s.n * push - gt * s.phi;
+}
+
 // Accelerations: gravity, viscosity (Morris et al. 1997 Laplacian, Monaghan 1992 artificial
 // viscosity, XSPH as a velocity-smoothing force) and, for WCSPH, the symmetric pressure force.
 // Walls are no-slip: the viscous term of a fluid pair, with the wall at rest, acting on the
@@ -280,7 +298,12 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
                        if (with_pressure) acc -= wall_pressure_term(b, j, gw, pi_rho2);
                      });
     NearSurface s;
-    if (with_pressure && near_surface(w.surface, i, s)) acc += surface_pressure(P, s, f.p[i], rhoi);
+    if (near_surface(w.surface, i, s)) {
+      const Vec3 push = with_pressure ? surface_pressure(P, s, f.p[i], rhoi)
+                                      : surface_stiffness(P, s, f.warm_dens[i]);
+      acc += push;
+      if (w.surface.dv) w.surface.dv[i] += push * dt;
+    }
     f.a[i] = acc;
   });
 }
@@ -375,10 +398,11 @@ constexpr Real kDfsphOmega = Real(0.5);
 constexpr Real kDfsphMemory = Real(0.05);
 constexpr Real kDfsphWarmSmoothing = Real(0.3);  // per step, dfsph_smooth_warm
 
-// Coefficient of grad W_ib in a DFSPH velocity update of particle i from wall sample b.
+// Coefficient of grad W_ib in a DFSPH velocity update of particle i from wall sample b: the
+// pair term psi_b / rho0 (kappa_i + kappa_b) of wall_source, symmetric like a fluid pair's.
 SPHFEM_HD Real dfsph_wall_pair(const SphParams& P, const BoundaryView& b, std::uint32_t j,
                                Real kappa_i, Real kappa_b) {
-  return (b.psi[j] / P.rho0) * kappa_i + P.volume * kappa_b;
+  return (b.psi[j] / P.rho0) * (kappa_i + kappa_b);
 }
 
 // One projected, relaxed Jacobi update (Bender & Koschier 2017, eqs. 9 and 12, with omega).
@@ -424,12 +448,20 @@ double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g, 
 
 // Wall samples as pressure carriers of the same solve, as the wall particles in the pressure
 // Poisson equation of Shao & Lo 2003: a sample's density rest + m sum_f W_bf may not exceed
-// rho0, and its stiffness pushes the fluid by V kappa_b grad W. With the fluid's own wall term
-// psi_b / rho0 kappa_i grad W the pair force is V (kappa_i + kappa_b) grad W on the lattice: the
-// wall pressure continues the fluid's, hydrostatic head included, and the velocity update is
-// the transpose of the density change, an orthogonal projection that cannot add kinetic
-// energy. Mirroring kappa_i onto the walls instead (kappa_b = kappa_i) is no projection: it
-// fed energy into a resting tank until it blew up.
+// rho0, and its stiffness pushes the fluid by psi_b / rho0 kappa_b grad W. With the fluid's own
+// wall term psi_b / rho0 kappa_i grad W the pair force is psi_b / rho0 (kappa_i + kappa_b)
+// grad W: the wall pressure continues the fluid's, hydrostatic head included, and the velocity
+// update is the transpose of the density change, an orthogonal projection that cannot add
+// kinetic energy. Mirroring kappa_i onto the walls instead (kappa_b = kappa_i) is no
+// projection: it fed energy into a resting tank until it blew up.
+// The constraint is weighted by psi_b / m, (psi_b / m) (rho_b / rho0 - 1) <= 0, which leaves
+// where it holds unchanged and makes its gradient the psi_b / rho0 grad W of the push. On the
+// tank's lattice psi_b = m and nothing changes. A one-layer moving surface is sampled more
+// densely than the lattice (psi_b ~ 0.56 m for 1.8 samples per s^2): with V kappa_b each
+// sample pushed as hard as a lattice sample, the warm start (the fluid's stiffness continued
+// to the sample) pushed about 1.8 times too hard, the sweeps took it back every step, and a
+// resting column kept boiling (kinetic energy 30 times WCSPH's, the force on the nodes off
+// by +-20 % from step to step, the pressure 15-20 % low).
 template <class Exec>
 double wall_source(Exec& ex, const SphParams P, const FluidView f, const GridView g, BoundaryView b,
                    Real dt, Real pos_rate, bool divergence) {
@@ -441,11 +473,13 @@ double wall_source(Exec& ex, const SphParams P, const FluidView f, const GridVie
     }
     Real d = 0;
     const Vec3 vb = b.v ? b.v[k] : Vec3();
+    const Real vol = b.psi[k] / P.rho0;
     for_neighbors(g, f.x, b.x[k], P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
       const Vec3 vj = b.v ? f.v[j] - vb : f.v[j];
-      d -= P.volume * dot(vj, P.kernel.grad(r, std::sqrt(r2)));
+      d -= vol * dot(vj, P.kernel.grad(r, std::sqrt(r2)));
     });
-    Real err = divergence ? d * dt : (b.rho[k] / P.rho0 - Real(1)) * pos_rate + dt * d;
+    const Real scale = b.psi[k] / P.mass;
+    Real err = divergence ? d * dt : (b.rho[k] / P.rho0 - Real(1)) * scale * pos_rate + dt * d;
     if (divergence && !b.full[k] && err > Real(0)) err = Real(0);
     return double(dfsph_update(err, alpha, b.kappa_sum[k], dt, b.kappa[k]));
   });
@@ -453,8 +487,9 @@ double wall_source(Exec& ex, const SphParams P, const FluidView f, const GridVie
 
 // Per step, for the wall samples with fluid in reach (the others only look up their empty
 // cells): density, diagonal, free-surface flag and warm starts. The diagonal is the larger of
-// sum_f |V grad W_bf|^2 and what all samples around the same particles do together, the sum
-// over f of V grad W_bf . sum_b' V grad W_b'f: the samples around a particle all push it the
+// sum_f |V_b grad W_bf|^2 and what all samples around the same particles do together, the sum
+// over f of V_b grad W_bf . sum_b' V grad W_b'f (V_b = psi_b / rho0, wall_source's weight;
+// the sum over b' as density() keeps it): the samples around a particle all push it the
 // same way, and with the exact diagonal a lone particle in a corner was pushed by each of them
 // as if it were the only one (the Jacobi sweep blew up). The warm starts are the Shepard
 // average of the fluid's, plus the hydrostatic head g . (x_b - x_f) for the density solve
@@ -467,9 +502,10 @@ int wall_density(Exec& ex, const SphParams P, const FluidView f, const GridView 
     Real sum = 0, grad2 = 0, shared = 0, kdiv = 0, kdens = 0;
     Vec3 srw;
     int count = 0;
+    const Real vol = b.psi[k] / P.rho0;
     for_neighbors(g, f.x, xb, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
       const Real rr = std::sqrt(r2);
-      const Vec3 gw = P.kernel.grad(r, rr) * P.volume;
+      const Vec3 gw = P.kernel.grad(r, rr) * vol;
       const Real w = P.kernel.W(rr);
       sum += w;
       grad2 += norm2(gw);
@@ -523,7 +559,7 @@ void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const Gri
 }
 
 // Density of the walls alone at each sample and the samples in reach; once for the tank
-// (share 1), every step for moving samples (share kMovingRestShare).
+// (share 1), every step for moving samples (share moving_rest_share).
 template <class Exec>
 void wall_rest(Exec& ex, const SphParams P, Real* rest, int* nb_rest, const BoundaryView b,
                Real share = Real(1)) {
@@ -568,8 +604,8 @@ void dfsph_remember(Exec& ex, FluidView f, Real weight, bool divergence) {
   });
 }
 
-// v_i -= dt (sum_j V (kappa_i + kappa_j) grad W_ij + sum_b (psi_b / rho0 kappa_i +
-// V kappa_b) grad W_ib); the sweep's stiffness joins the sums, and the fluid's the pressure
+// v_i -= dt (sum_j V (kappa_i + kappa_j) grad W_ij + sum_b psi_b / rho0 (kappa_i + kappa_b)
+// grad W_ib); the sweep's stiffness joins the sums, and the fluid's the pressure
 // p_i = rho_i^2 / rho0 kappa_i (gauges, output). A surface without samples adds
 // kappa_i Phi'(d) n, the transpose of its term in the density change (dfsph_source), so the
 // update stays a projection; it carries no stiffness of its own (wall_accumulate).
@@ -590,7 +626,11 @@ void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, con
                        if (k != Real(0)) dv += P.kernel.grad(r, std::sqrt(r2)) * k;
                      });
     NearSurface s;
-    if (near_surface(w.surface, i, s)) dv -= s.n * (s.slope * ki);
+    if (near_surface(w.surface, i, s)) {
+      const Vec3 push = s.n * (s.slope * ki);
+      dv -= push;
+      if (w.surface.dv) w.surface.dv[i] += push * dt;
+    }
     f.v[i] -= dv * dt;
     f.kappa_sum[i] += ki;
     f.p[i] += ki * f.rho[i] * f.rho[i] / P.rho0;

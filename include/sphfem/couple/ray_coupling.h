@@ -26,6 +26,16 @@ struct BodyStepError : std::runtime_error {
 };
 
 struct RayCouplingSettings {
+  // false: the boundary-particle baseline (paper Fig. 8). The hook then casts no ray and
+  // exchanges no impulse: it steps the bodies, hands their surface to the fluid's samples
+  // (StepHook::moving_boundary), whose forces return to the nodes, and still measures every
+  // particle's crossing of a body surface (`crossed`) without putting it back.
+  bool rays = true;
+  // Near-surface density (sph/surface_density.h): each particle's closest body surface point
+  // within `support` (the kernel's radius) goes to the fluid, and the pressure it exerts
+  // there returns to the face's nodes.
+  bool near_surface = false;
+  Real support = 0;
   Real skin = 0;  // m, kept between a particle and the surface it hits
   bool tank = true;
   Vec3 tank_lo, tank_hi;  // the tank's inner faces
@@ -42,6 +52,7 @@ struct RayCouplingStats {
   long crossed = 0;    // particles whose displacement crossed a body surface (goal: 0)
   long corrected = 0;  // crossings found by the re-cast and put back in front of the face
   int rebuilds = 0;
+  long near_surface = 0;  // particle-steps with a body surface within the kernel's support
   double ms_fem = 0, ms_collide = 0, ms_couple = 0, ms_leak_check = 0;
   BodyStepInfo last_body_step;
   std::vector<Vec3d> body_impulse;  // N s given to each body by the fluid

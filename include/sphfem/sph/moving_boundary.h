@@ -7,6 +7,9 @@
 // nodes by the same weights: the fluid and the nodes exchange momentum exactly. The samples
 // act on the fluid through the same code as the tank's wall samples (src/sph/stages.h), with
 // Akinci's psi = rho0 / sum_k W_bk over the samples around each one, taken every step.
+// Under DFSPH a sample also carries a stiffness, weighted by psi like the fluid's term, and
+// its density constraint counts the layer behind it at the share that the fluid resting in
+// front of it completes to rho0 (stages::moving_rest_share, src/sph/moving_stages.h).
 #pragma once
 
 #include <vector>

@@ -85,11 +85,14 @@ struct DriftLimits {
 // (sph/surface_density.h): per particle in the step's order, in the solver's memory space.
 // dist (m, >= 0) to the closest surface point and the unit normal there, pointing from the
 // surface to the particle; dist >= the support radius or a zero normal: no surface in reach.
-// velocity: of that surface point (nullptr: at rest).
+// velocity: of that surface point (nullptr: at rest). dv (optional, zeroed by the hook): the
+// step adds the velocity change the surface's pressure gave each particle, so that the hook
+// can return the opposite impulse to the surface and momentum is exchanged, not created.
 struct SurfaceProximity {
   const Real* dist = nullptr;
   const Vec3* normal = nullptr;
   const Vec3* velocity = nullptr;
+  Vec3* dv = nullptr;
 };
 
 // Code run inside a fluid step, for two-way coupling. The step is:
