@@ -34,6 +34,11 @@ class SolverT final : public FluidSolver {
     warm_dens_.zero();
     nb_ = Buffer<int>(s, cap_);
     full_ = Buffer<int>(s, cap_);
+    // Room for twice a full support's neighbours; a particle compressed beyond that scans the
+    // grid instead (stages::for_fluid_neighbors).
+    nbr_cap_ = std::max(32, 2 * m.params.full_neighbors);
+    nbr_ = Buffer<std::uint32_t>(s, std::size_t(cap_) * std::size_t(nbr_cap_));
+    nbr_n_ = Buffer<int>(s, cap_);
     for (Buffer<std::uint32_t>* b : {&id_, &tmpu_, &keys_, &perm_})
       *b = Buffer<std::uint32_t>(s, cap_);
     start_ = Buffer<std::uint32_t>(s, std::size_t(m.grid.cells()) + 1);
@@ -380,6 +385,9 @@ class SolverT final : public FluidSolver {
     f.gwall = tmp3_.data();  // free between the sort and the next one
     f.nb = nb_.data();
     f.id = id_.data();
+    f.nbr = nbr_.data();
+    f.nbr_n = nbr_n_.data();
+    f.nbr_cap = nbr_cap_;
     return f;
   }
 
@@ -546,6 +554,9 @@ class SolverT final : public FluidSolver {
   Buffer<Real> rho_, p_, alpha_, kappa_, ksum_, tmpr_;
   Buffer<Real> warm_div_, warm_dens_;  // DFSPH warm starts, follow the particles
   Buffer<int> nb_, full_;
+  Buffer<std::uint32_t> nbr_;  // fluid neighbour lists of the step (FluidView::nbr)
+  Buffer<int> nbr_n_;
+  int nbr_cap_ = 0;
   Buffer<std::uint32_t> id_, tmpu_, keys_, perm_, start_;
   Buffer<Vec3> bx_;
   Buffer<Real> bpsi_, brest_, bpw_, brho_, balpha_, bkappa_, bksum_, bwarm_div_, bwarm_dens_;

