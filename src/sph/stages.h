@@ -182,11 +182,15 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     Real sum = 0, grad2 = 0;
     Vec3 gsum, gwall, gwall_v;
     int count = 0, walls = 0;
-    std::uint32_t* list = f.nbr ? f.nbr + std::size_t(i) * std::size_t(f.nbr_cap) : nullptr;
+    // Branch-free store into the list (or a scratch slot without one): the last slot takes the
+    // overflow, which nbr_n = -1 then marks unused.
+    std::uint32_t scratch;
+    std::uint32_t* list = f.nbr ? f.nbr + std::size_t(i) * std::size_t(f.nbr_cap) : &scratch;
+    const int last = f.nbr ? f.nbr_cap - 1 : 0;
     for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
       const Real rr = std::sqrt(r2);
       sum += P.kernel.W(rr);
-      if (list && count < f.nbr_cap) list[count] = j;
+      list[count < last ? count : last] = j;
       ++count;
       if (with_alpha) {
         const Vec3 gw = P.kernel.grad(r, rr) * P.volume;
@@ -214,7 +218,7 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     }
     f.rho[i] = rho;
     f.nb[i] = count;
-    if (list) f.nbr_n[i] = count <= f.nbr_cap ? count : -1;
+    if (f.nbr) f.nbr_n[i] = count <= f.nbr_cap ? count : -1;
     if (!with_alpha) {
       const Real p = P.stiffness * (rho / P.rho0 - Real(1));
       f.p[i] = p > Real(0) ? p : Real(0);
