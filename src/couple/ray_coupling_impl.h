@@ -74,8 +74,9 @@ class RayCouplingT final : public RayCoupling {
     const auto t0 = Clock::now();
     const int n = f.n;
     grow(n);
+    // No refit: the build, and each step's refit over x_old -> x, already bound the bodies
+    // where they are now (they move only inside before_drift).
     const BodyArrays a = bodies_->arrays();
-    body_bvh_.refit(ex_, a.x);
     int* face = near_face_.data();
     Real *dist = near_dist_.data(), *u = near_u_.data(), *v = near_v_.data();
     Vec3 *nrm = near_n_.data(), *vel = near_vel_.data(), *dv = near_dv_.data();
