@@ -331,6 +331,21 @@ void cast_moving(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x_old, const
 }
 
 template <class Exec>
+void cast_contacts(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x_old, const Vec3* x_new,
+                   int n, const Vec3* from, const Vec3* to, Real tol, ContactHits out) {
+  const collide::BvhView bv = bvh.view();
+  parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) {
+    const collide::ContactHit h =
+        collide::moving_contact(bv, x_old, x_new, from[i], to[i] - from[i], tol);
+    out.face[i] = h.face;
+    if (out.tau) out.tau[i] = h.c.tau;
+    if (out.u) out.u[i] = h.c.u;
+    if (out.v) out.v[i] = h.c.v;
+    if (out.side) out.side[i] = h.c.side;
+  });
+}
+
+template <class Exec>
 void count_crossings(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x, int n, const Vec3* from,
                      const Vec3* to, int* count) {
   const collide::BvhView bv = bvh.view();
@@ -373,6 +388,8 @@ void closest_points(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x, int n,
                                 const Vec3*, const Real*, RayHits);                                \
   template void cast_moving<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, const Vec3*, int,   \
                                   const Vec3*, const Vec3*, Real, Real, SegmentHits, int, bool);   \
+  template void cast_contacts<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, const Vec3*, int, \
+                                    const Vec3*, const Vec3*, Real, ContactHits);                 \
   template void count_crossings<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, int,            \
                                       const Vec3*, const Vec3*, int*);                             \
   template void inside_closed<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, int, const Vec3*, \

@@ -22,7 +22,7 @@ class RayCouplingT final : public RayCoupling {
   RayCouplingT(const RayCouplingSettings& s, BodySolver* bodies, Backend backend)
       : set_(s), bodies_(bodies), coupler_(make_coupler(backend)) {
     const MemSpace sp = Exec::kSpace;
-    for (Buffer<int>* b : {&face_, &tank_face_}) *b = Buffer<int>(sp);
+    for (Buffer<int>* b : {&face_, &tank_face_, &side_}) *b = Buffer<int>(sp);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       *b = Buffer<Real>(sp);
     for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_}) *b = Buffer<Real>(sp);
@@ -30,7 +30,6 @@ class RayCouplingT final : public RayCoupling {
     for (Buffer<Vec3>* b : {&near_n_, &near_vel_, &near_dv_}) *b = Buffer<Vec3>(sp);
     x_pre_ = Buffer<Vec3>(sp);
     rel_ = Buffer<Vec3>(sp);
-    vel_ = Buffer<Vec3>(sp);
     if (bodies_) {
       const BodyArrays a = bodies_->arrays();
       if (a.triangles > 0) {
@@ -166,13 +165,13 @@ class RayCouplingT final : public RayCoupling {
 
   void after_drift(const FluidArrays& f, double dt) override {
     if (!set_.rays) {
-      if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, dt, 1);
+      if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, 1);
       return;
     }
     auto t0 = Clock::now();
     coupler_->push_out(hits(), f, surfaces_, set_.skin);
     stats_.ms_couple += ms_since(t0);
-    if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, dt, 4);
+    if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, 4);
     t0 = Clock::now();
     // The impulse lands in the nodes' array; collect_body_impulse counts it per body.
     const CoupleStats cs = coupler_->apply(hits(), f, surfaces_);
@@ -254,12 +253,12 @@ class RayCouplingT final : public RayCoupling {
   }
 
   void grow(int n) {
-    for (Buffer<int>* b : {&face_, &tank_face_}) grow_buffer(*b, n);
+    for (Buffer<int>* b : {&face_, &tank_face_, &side_}) grow_buffer(*b, n);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       grow_buffer(*b, n);
     for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_}) grow_buffer(*b, n);
     grow_buffer(near_face_, n);
-    for (Buffer<Vec3>* b : {&x_pre_, &rel_, &vel_, &near_n_, &near_vel_, &near_dv_})
+    for (Buffer<Vec3>* b : {&x_pre_, &rel_, &near_n_, &near_vel_, &near_dv_})
       grow_buffer(*b, n);
   }
 
@@ -353,54 +352,45 @@ class RayCouplingT final : public RayCoupling {
     return s;
   }
 
-  // The one ray per particle respects only its nearest face: a particle stopped by the tank,
-  // or carried with one face, can still be crossed by another face moving differently (a
-  // cloth edge beside a wall, a concave corner). So each particle's actual displacement over
-  // the step, relative to the body surfaces, is cast again (no skin); one that went through a
-  // face is put back a skin short of it, as eq. 6 would have, and cast again. The first cast
-  // is the leak check; what still crosses after the last pass is counted in `crossed`.
-  // The baseline (passes = 1) only counts.
-  long resolve_crossings(const FluidArrays& f, double dt, int kPasses) {
+  // The one ray per particle respects only its nearest face, and moves that face with one
+  // point's displacement: a particle stopped by the tank, or carried with one face, can still
+  // be crossed by another face moving differently (a cloth edge beside a wall, a concave
+  // corner), or by a face that turns within the step. So each particle's actual path over the
+  // step is tested again, exactly, against every body face moving linearly from its old to
+  // its new position (collide::moving_contact). A particle that met a face is put a skin in
+  // front of that face's new position, on the side it came from, and tested again. The first
+  // test is the leak check; what still meets a face after the last pass is counted in
+  // `crossed`. The baseline (passes = 1) only counts.
+  long resolve_crossings(const FluidArrays& f, int kPasses) {
     const int n = f.n;
-    Vec3* vel = vel_.data();
     Vec3* x = f.x;
     const Vec3* pre = x_pre_.data();
-    const Real inv_dt = Real(1.0 / dt);
     const Real skin = set_.skin;
+    // Rounding of the contact test; far below the skin the fix keeps.
+    const Real tol = collide::rmax(Real(0.01) * skin, Real(1e-7));
     const BodyArrays a = bodies_->arrays();
     int* face = tank_face_.data();  // the coupler is done with the tank's hit buffers
-    Real *t = tank_t_.data(), *len = tank_len_.data();
-    Vec3* rel = rel_.data();
+    Real *tau = tank_t_.data(), *hu = tank_u_.data(), *hv = tank_v_.data();
+    int* side = side_.data();
     long crossed = 0;
     for (int pass = 0; pass < kPasses; ++pass) {
       const auto t0 = Clock::now();
-      parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) { vel[i] = (x[i] - pre[i]) * inv_dt; });
-      cast_moving(ex_, body_bvh_, x_old_.data(), a.x, n, pre, vel, Real(dt), Real(0),
-                  SegmentHits{face, t, tank_u_.data(), tank_v_.data(), len, rel});
-      const double c = reduce_sum(ex_, n, [=] SPHFEM_LAMBDA(int i) -> double {
-        return face[i] >= 0 && t[i] < len[i] ? 1.0 : 0.0;
-      });
+      cast_contacts(ex_, body_bvh_, x_old_.data(), a.x, n, pre, x, tol,
+                    ContactHits{face, tau, hu, hv, side});
+      const double c =
+          reduce_sum(ex_, n, [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; });
       crossed = long(c + 0.5);
       (pass == 0 ? stats_.ms_leak_check : stats_.ms_couple) += ms_since(t0);
       if (crossed == 0 || pass == kPasses - 1) break;
       const auto t1 = Clock::now();
-      // x - pre = s dt + rel (s: the face's velocity at the hit): keep s dt, shorten rel; then,
-      // as push_out does, at least a skin in front of the face's plane on the side it came from.
       const Vec3* nx = a.x;
       const Tri* tris = a.surface;
-      const Real* hu = tank_u_.data();
-      const Real* hv = tank_v_.data();
       parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) {
-        if (face[i] < 0 || !(t[i] < len[i])) return;
-        const Real keep = t[i] > skin ? (t[i] - skin) / len[i] : Real(0);
-        x[i] -= rel[i] * (Real(1) - keep);
+        if (face[i] < 0) return;
         const Tri tr = tris[face[i]];
         const Vec3 p0 = nx[tr.v[0]], p1 = nx[tr.v[1]], p2 = nx[tr.v[2]];
-        const Vec3 nrm = couple::face_normal(p0, p1, p2);
-        const Real side = dot(rel[i], nrm) < Real(0) ? Real(1) : Real(-1);
         const Vec3 c = p0 * (Real(1) - hu[i] - hv[i]) + p1 * hu[i] + p2 * hv[i];
-        const Real d = side * dot(x[i] - c, nrm);
-        if (d < skin) x[i] += nrm * (side * (skin - d));
+        x[i] = c + couple::face_normal(p0, p1, p2) * (Real(side[i]) * skin);
       });
       exec_sync(ex_);
       stats_.corrected += crossed;
@@ -415,9 +405,9 @@ class RayCouplingT final : public RayCoupling {
   Exec ex_;
   SurfaceBvh<Exec> body_bvh_, tank_bvh_;
   int body_tris_ = 0, tank_tris_ = 0;
-  Buffer<Vec3> x_old_, tank_x_, x_pre_, vel_, rel_;
+  Buffer<Vec3> x_old_, tank_x_, x_pre_, rel_;
   Buffer<Tri> tank_tri_;
-  Buffer<int> face_, tank_face_;
+  Buffer<int> face_, tank_face_, side_;
   Buffer<Real> t_, u_, v_, len_, tank_t_, tank_u_, tank_v_, tank_len_;
   // Near-surface density: each particle's closest body face this step.
   Buffer<int> near_face_;

@@ -92,6 +92,14 @@ struct SegmentHits {
   Vec3* rel = nullptr;  // optional: the relative motion (particle minus face) over the step
 };
 
+struct ContactHits {
+  int* face = nullptr;  // -1: no contact
+  Real* tau = nullptr;  // time of the contact within the step, in (0, 1]
+  Real* u = nullptr;    // barycentric weights of the face's second and third vertex there
+  Real* v = nullptr;
+  int* side = nullptr;  // the particle's side before it: +1 in front of the face, -1 behind
+};
+
 struct ClosestHits {
   int* face = nullptr;  // -1: nothing within the radius
   Real* dist = nullptr;
@@ -117,6 +125,13 @@ template <class Exec>
 void cast_moving(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x_old, const Vec3* x_new, int n,
                  const Vec3* p, const Vec3* vel, Real dt, Real skin, SegmentHits out,
                  int face_offset = 0, bool merge = false);
+
+// The earliest exact contact (within tol) of each particle's straight path from[i] -> to[i]
+// over a step with the faces moving linearly from x_old to x_new (bvh refit with
+// refit(ex, x_old, x_new)): collide::moving_contact.
+template <class Exec>
+void cast_contacts(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x_old, const Vec3* x_new,
+                   int n, const Vec3* from, const Vec3* to, Real tol, ContactHits out);
 
 // Number of faces the segment from[i] -> to[i] crosses.
 template <class Exec>

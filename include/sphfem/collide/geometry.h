@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cfloat>
+#include <cmath>
 
 #include "sphfem/core/vec.h"
 
@@ -288,6 +289,122 @@ SPHFEM_HD bool moving_triangle(const Vec3& p, const Vec3& dp, Real skin, const V
   if (len1 > 0 && intersect_ray_triangle(p, rel1 / len1, a, b, c, len1 + skin, t, u, v))
     hit = MovingHit{t, u, v, len1, rel1};
   return true;
+}
+
+// --- exact continuous collision of a point and a linearly moving face ---
+
+// Where a particle moving linearly from p by dp over a step meets a face whose vertices move
+// linearly from (a, b, c) by (da, db, dc) over the same step: tau in (0, 1] is the time in the
+// step, (u, v) the barycentrics of the contact at that time, side the sign of the particle's
+// side of the face before it (+1: the side the face normal (b - a) x (c - a) points to).
+struct Crossing {
+  Real tau = 0, u = 0, v = 0;
+  int side = 0;
+};
+
+// f(tau) = (p - a) . ((b - a) x (c - a)) at time tau, a cubic in tau; k[i] multiplies tau^i.
+// In double: the inputs are floats, and the products of their differences lose nothing that
+// matters to the sign changes below.
+SPHFEM_HD void coplanarity_cubic(const Vec3d& P, const Vec3d& dP, const Vec3d& B, const Vec3d& dB,
+                                 const Vec3d& C, const Vec3d& dC, double k[4]) {
+  const Vec3d n0 = cross(B, C), n1 = cross(dB, C) + cross(B, dC), n2 = cross(dB, dC);
+  k[0] = dot(P, n0);
+  k[1] = dot(dP, n0) + dot(P, n1);
+  k[2] = dot(dP, n1) + dot(P, n2);
+  k[3] = dot(dP, n2);
+}
+
+SPHFEM_HD double cubic_at(const double k[4], double t) {
+  return ((k[3] * t + k[2]) * t + k[1]) * t + k[0];
+}
+
+// The times in (0, 1] to test, ascending: every root of the cubic there (bisection on the
+// monotone pieces between the roots of its derivative), every interior extremum (a touch
+// without a sign change) and the step's end. Returns how many (at most 6).
+SPHFEM_HD int contact_candidates(const double k[4], double out[6]) {
+  // Split points: 0, the derivative's roots in (0, 1), 1.
+  double s[4];
+  int ns = 0;
+  s[ns++] = 0;
+  const double a = 3 * k[3], b = 2 * k[2], c = k[1];  // f' = a t^2 + b t + c
+  double r0 = 2, r1 = 2;
+  const double scale = std::fabs(a) + std::fabs(b) + std::fabs(c);
+  if (scale > 0) {
+    if (std::fabs(a) <= 1e-12 * scale) {
+      if (b != 0) r0 = -c / b;
+    } else {
+      const double disc = b * b - 4 * a * c;
+      if (disc >= 0) {
+        const double q = -0.5 * (b + (b < 0 ? -1 : 1) * std::sqrt(disc));
+        r0 = q / a;
+        r1 = q != 0 ? c / q : 2;
+        if (r1 < r0) {
+          const double t = r0;
+          r0 = r1, r1 = t;
+        }
+      }
+    }
+  }
+  if (r0 > 0 && r0 < 1) s[ns++] = r0;
+  if (r1 > 0 && r1 < 1 && r1 != r0) s[ns++] = r1;
+  s[ns++] = 1;
+  int m = 0;
+  for (int j = 0; j + 1 < ns; ++j) {
+    double lo = s[j], hi = s[j + 1];
+    double flo = cubic_at(k, lo), fhi = cubic_at(k, hi);
+    if (flo != 0 && fhi != 0 && (flo < 0) != (fhi < 0)) {
+      for (int it = 0; it < 60 && hi - lo > 1e-15; ++it) {
+        const double mid = 0.5 * (lo + hi), fm = cubic_at(k, mid);
+        if (fm == 0) {
+          lo = hi = mid;
+          break;
+        }
+        if ((fm < 0) == (flo < 0))
+          lo = mid, flo = fm;
+        else
+          hi = mid;
+      }
+      out[m++] = hi;  // the later end: the particle has reached the plane
+    }
+    out[m++] = s[j + 1];  // an extremum, or the step's end
+  }
+  return m;
+}
+
+// Exact continuous collision of the particle's path with the moving face, up to tol: the
+// earliest time in (0, tau_max) at which the particle is within tol of the face (a root of
+// the coplanarity cubic, an extremum of it, or the step's end). Unlike moving_triangle it
+// follows every vertex's own motion, so a face that turns or stretches within the step is
+// caught exactly. Rounding is covered by tol, which also makes shared edges count on both
+// faces. A particle that starts on the face's plane and touches nothing else is no crossing.
+SPHFEM_HD bool point_face_contact(const Vec3& p, const Vec3& dp, const Vec3& a, const Vec3& b,
+                                  const Vec3& c, const Vec3& da, const Vec3& db, const Vec3& dc,
+                                  Real tol, Real tau_max, Crossing& out) {
+  const Vec3d A(a), dA(da);
+  const Vec3d P = Vec3d(p) - A, dP = Vec3d(dp) - dA;
+  const Vec3d B = Vec3d(b) - A, dB = Vec3d(db) - dA;
+  const Vec3d C = Vec3d(c) - A, dC = Vec3d(dc) - dA;
+  double k[4];
+  coplanarity_cubic(P, dP, B, dB, C, dC, k);
+  if (k[0] == 0 && k[1] == 0 && k[2] == 0 && k[3] == 0) return false;
+  double cand[6];
+  const int m = contact_candidates(k, cand);
+  double prev = 0;
+  for (int j = 0; j < m; ++j) {
+    const double t = cand[j];
+    if (!(t < double(tau_max))) break;
+    // Relative to the particle at time t, so that float keeps the small distances.
+    const Vec3d pt = P + dP * t;
+    const Vec3 qa(Vec3d() - pt), qb(B + dB * t - pt), qc(C + dC * t - pt);
+    const ClosestOnTriangle q = closest_on_triangle(Vec3(), qa, qb, qc);
+    const double fmid = cubic_at(k, 0.5 * (prev + t));
+    if (norm(q.point) <= tol && fmid != 0) {
+      out = Crossing{Real(t), q.u, q.v, fmid > 0 ? 1 : -1};
+      return true;
+    }
+    prev = t;
+  }
+  return false;
 }
 
 // Bound on how far moving_triangle's casts, which move the whole face with the displacement

@@ -153,50 +153,32 @@ SPHFEM_HD int ray_count(const BvhView& bv, const Vec3* x, const Vec3& o, const V
   return count;
 }
 
-// The moving-segment query (see moving_triangle): a particle at p moving by dp over a step
-// against faces moving from x_old to x_new. The BVH must have been refit over both
-// positions (SurfaceBvh::refit(ex, x_old, x_new)): its leaf boxes then hold the swept faces,
-// inflated by their sweep_deviation, and the particle's own path p -> p + dp passes through
-// every box that can hold a hit, once the boxes grow by skin. Returns the earliest hit in
-// the step's time, t / len (ties to the lower face id).
-SPHFEM_HD SegmentHit moving_nearest(const BvhView& bv, const Vec3* x_old, const Vec3* x_new,
-                                    const Vec3& p, const Vec3& dp, Real skin) {
-  SegmentHit h;
-  if (bv.ntris == 0) return h;
+// Nearest-first descent of the boxes that the path p -> p + dp (parameterised over [0, 1])
+// passes through, the boxes grown by pad, skipping what lies beyond visit.best (a time in
+// steps). visit(f) tests face f and may lower visit.best. The BVH must have been refit over
+// the step (SurfaceBvh::refit(ex, x_old, x_new)): its leaf boxes then hold the swept faces.
+template <class Visit>
+SPHFEM_HD void descend_path(const BvhView& bv, const Vec3& p, const Vec3& dp, Real pad,
+                            Visit& visit) {
+  if (bv.ntris == 0) return;
   const SlabRay sr = slab_ray(p, dp);
-  Real best = Real(FLT_MAX);  // time of the hit, in steps
   int stack[kStackSize];
   Real enter[kStackSize];
   int sp = 0;
   Real te;
   int node = 0;
-  // The path is parameterised over [0, 1]; a hit in the skin beyond the step lies in a box
-  // the path's end point touches.
-  if (!slab_test(sr, bv.nodes[0].lo, bv.nodes[0].hi, skin, 0, 1, te)) return h;
+  if (!slab_test(sr, bv.nodes[0].lo, bv.nodes[0].hi, pad, 0, 1, te)) return;
   for (;;) {
     const BvhNode n = bv.nodes[node];
     if (is_leaf(n)) {
-      for (int k = n.a; k < n.a - n.b; ++k) {
-        const int f = bv.prims[k];
-        const Tri tr = bv.tris[f];
-        const Vec3 a = x_old[tr.v[0]], b = x_old[tr.v[1]], c = x_old[tr.v[2]];
-        MovingHit m;
-        if (moving_triangle(p, dp, skin, a, b, c, x_new[tr.v[0]] - a, x_new[tr.v[1]] - b,
-                            x_new[tr.v[2]] - c, m)) {
-          const Real tau = m.t / m.len;
-          if (closer(tau, f, best, h.face)) {
-            best = tau;
-            h.face = f, h.t = m.t, h.u = m.u, h.v = m.v, h.len = m.len, h.rel = m.rel;
-          }
-        }
-      }
+      for (int k = n.a; k < n.a - n.b; ++k) visit(bv.prims[k]);
     } else {
       const BvhNode& l = bv.nodes[n.a];
       const BvhNode& r = bv.nodes[n.b];
       Real tl, tr;
-      const Real lim = rmin(best, Real(1));
-      const bool hl = slab_test(sr, l.lo, l.hi, skin, 0, lim, tl);
-      const bool hr = slab_test(sr, r.lo, r.hi, skin, 0, lim, tr);
+      const Real lim = rmin(visit.best, Real(1));
+      const bool hl = slab_test(sr, l.lo, l.hi, pad, 0, lim, tl);
+      const bool hr = slab_test(sr, r.lo, r.hi, pad, 0, lim, tr);
       if (hl && hr) {
         const bool left_first = tl <= tr;
         stack[sp] = left_first ? n.b : n.a;
@@ -210,11 +192,82 @@ SPHFEM_HD SegmentHit moving_nearest(const BvhView& bv, const Vec3* x_old, const 
       }
     }
     do {
-      if (sp == 0) return h;
+      if (sp == 0) return;
       --sp;
-    } while (enter[sp] > best);
+    } while (enter[sp] > visit.best);
     node = stack[sp];
   }
+}
+
+// moving_triangle against each face a path reaches; keeps the earliest hit in the step.
+struct MovingVisit {
+  const BvhView& bv;
+  const Vec3 *x_old, *x_new;
+  Vec3 p, dp;
+  Real skin;
+  Real best = Real(FLT_MAX);  // time of the hit, in steps
+  SegmentHit h;
+  SPHFEM_HD void operator()(int f) {
+    const Tri tr = bv.tris[f];
+    const Vec3 a = x_old[tr.v[0]], b = x_old[tr.v[1]], c = x_old[tr.v[2]];
+    MovingHit m;
+    if (!moving_triangle(p, dp, skin, a, b, c, x_new[tr.v[0]] - a, x_new[tr.v[1]] - b,
+                         x_new[tr.v[2]] - c, m))
+      return;
+    const Real tau = m.t / m.len;
+    if (closer(tau, f, best, h.face)) {
+      best = tau;
+      h.face = f, h.t = m.t, h.u = m.u, h.v = m.v, h.len = m.len, h.rel = m.rel;
+    }
+  }
+};
+
+// The moving-segment query (see moving_triangle): a particle at p moving by dp over a step
+// against faces moving from x_old to x_new. The particle's own path p -> p + dp passes
+// through every box that can hold a hit, once the boxes grow by skin (a hit in the skin
+// beyond the step lies in a box the path's end point touches). Returns the earliest hit in
+// the step's time, t / len (ties to the lower face id).
+SPHFEM_HD SegmentHit moving_nearest(const BvhView& bv, const Vec3* x_old, const Vec3* x_new,
+                                    const Vec3& p, const Vec3& dp, Real skin) {
+  MovingVisit visit{bv, x_old, x_new, p, dp, skin, Real(FLT_MAX), SegmentHit()};
+  descend_path(bv, p, dp, skin, visit);
+  return visit.h;
+}
+
+// The earliest exact contact (point_face_contact) of a particle's path p -> p + dp with the
+// faces moving linearly from x_old to x_new over the step; face -1 when none.
+struct ContactHit {
+  int face = -1;
+  Crossing c;
+};
+
+struct ContactVisit {
+  const BvhView& bv;
+  const Vec3 *x_old, *x_new;
+  Vec3 p, dp;
+  Real tol;
+  Real best = Real(2);  // beyond the step: nothing found yet
+  ContactHit h;
+  SPHFEM_HD void operator()(int f) {
+    const Tri tr = bv.tris[f];
+    const Vec3 a = x_old[tr.v[0]], b = x_old[tr.v[1]], c = x_old[tr.v[2]];
+    Crossing k;
+    // A little beyond best, so that ties go to the lower face id (closer) in any visit order.
+    if (!point_face_contact(p, dp, a, b, c, x_new[tr.v[0]] - a, x_new[tr.v[1]] - b,
+                            x_new[tr.v[2]] - c, tol, best * slab_slack(), k))
+      return;
+    if (closer(k.tau, f, best, h.face)) {
+      best = k.tau;
+      h.face = f, h.c = k;
+    }
+  }
+};
+
+SPHFEM_HD ContactHit moving_contact(const BvhView& bv, const Vec3* x_old, const Vec3* x_new,
+                                    const Vec3& p, const Vec3& dp, Real tol) {
+  ContactVisit visit{bv, x_old, x_new, p, dp, tol, Real(2), ContactHit()};
+  descend_path(bv, p, dp, tol, visit);
+  return visit.h;
 }
 
 // Unit normal of triangle (a, b, c), or 0 for a degenerate one.
