@@ -100,6 +100,22 @@ SegmentHit brute_moving(const Surface& s0, const Surface& s1, const Vec3& p, con
   return h;
 }
 
+ContactHit brute_contact(const Surface& s0, const Surface& s1, const Vec3& p, const Vec3& dp,
+                         Real tol) {
+  ContactHit h;
+  Real best = 2;
+  for (int f = 0; f < int(s0.tris.size()); ++f) {
+    const Tri& t = s0.tris[f];
+    const Vec3 a = s0.x[t.v[0]], b = s0.x[t.v[1]], c = s0.x[t.v[2]];
+    Crossing k;
+    if (point_face_contact(p, dp, a, b, c, s1.x[t.v[0]] - a, s1.x[t.v[1]] - b, s1.x[t.v[2]] - c,
+                           tol, 2, k) &&
+        closer(k.tau, f, best, h.face))
+      best = k.tau, h.face = f, h.c = k;
+  }
+  return h;
+}
+
 double brute_distance(const Surface& s, const Vec3& p, int* face = nullptr) {
   double best = 1e30;
   for (int f = 0; f < int(s.tris.size()); ++f) {
@@ -147,13 +163,18 @@ std::vector<Vec3> moved(const std::vector<Vec3>& x, const Vec3& centre, Vec3 axi
 // a few units of round-off, and a different face is only accepted at a tie within that.
 constexpr double kRoundoff = 1e-6;
 
-::testing::AssertionResult same_hit(int fa, double ta, int fb, double tb) {
-  const bool near = std::fabs(ta - tb) <= kRoundoff * std::max(1.0, std::fabs(tb));
+::testing::AssertionResult same_hit(int fa, double ta, int fb, double tb,
+                                    double roundoff = kRoundoff) {
+  const bool near = std::fabs(ta - tb) <= roundoff * std::max(1.0, std::fabs(tb));
   if ((fa < 0) != (fb < 0) || (fa != fb && !near) || (fa >= 0 && !near))
     return ::testing::AssertionFailure()
            << "face " << fa << " at " << ta << " vs brute force face " << fb << " at " << tb;
   return ::testing::AssertionSuccess();
 }
+
+// A contact time is a root of a cubic: where the particle meets the face at a shallow angle
+// the root moves by the coefficients' last-bit differences over a small slope.
+constexpr double kContactRoundoff = 1e-5;
 
 class CollideBvh : public ::testing::TestWithParam<BvhBuild> {
  protected:
@@ -382,6 +403,66 @@ TEST_P(CollideBvh, MovingSegmentsMatchBruteForce) {
       hits += a.face >= 0;
     }
     EXPECT_GT(hits, 200);
+  }
+}
+
+TEST_P(CollideBvh, ExactContactsMatchBruteForce) {
+  // The same moving meshes: the earliest exact contact of each path through the BVH over
+  // swept boxes is the brute-force one over all faces; cast_contacts gives the same, and a
+  // particle put a skin in front of the face's new position there meets nothing more.
+  std::mt19937 rng(16);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (const Surface& s0 : test_surfaces()) {
+    Vec3 lo, hi;
+    bounds(s0.x, lo, hi);
+    const Real size = norm(hi - lo);
+    const Vec3 centre = (lo + hi) * Real(0.5);
+    Surface s1 = s0;
+    s1.x = moved(s0.x, centre, Vec3(-0.4f, 1, 0.2f), Real(0.2), Vec3(-0.02f, 0.03f, 0.04f) * size);
+    for (std::size_t i = 0; i < s1.x.size(); ++i)
+      s1.x[i] += Vec3(U(rng), U(rng), U(rng)) * Real(0.01) * size;
+    SurfaceBvh<CpuExec> bvh;
+    bvh.build(ex, s0.x.data(), s0.tris.data(), int(s0.tris.size()), GetParam());
+    bvh.refit(ex, s0.x.data(), s1.x.data());
+    const BvhView bv = bvh.view();
+    const Real tol = Real(1e-5) * size;
+    std::vector<Vec3> from, to;
+    std::vector<ContactHit> want;
+    int hits = 0;
+    for (int i = 0; i < 2000; ++i) {
+      const Tri& t = s0.tris[rng() % s0.tris.size()];
+      const Vec3 p = (s0.x[t.v[0]] + s0.x[t.v[1]] + s0.x[t.v[2]]) / Real(3) +
+                     random_unit(rng) * Real(0.1 * size * (U(rng) + 1) / 2);
+      const Vec3 dp = random_unit(rng) * Real(0.08 * size * (U(rng) + 1) / 2);
+      const ContactHit a = moving_contact(bv, s0.x.data(), s1.x.data(), p, dp, tol);
+      const ContactHit b = brute_contact(s0, s1, p, dp, tol);
+      ASSERT_TRUE(same_hit(a.face, a.c.tau, b.face, b.c.tau, kContactRoundoff)) << "particle " << i;
+      if (a.face >= 0 && a.face == b.face) {
+        EXPECT_EQ(a.c.side, b.c.side);
+        EXPECT_NEAR(a.c.u, b.c.u, kRoundoff);
+      }
+      hits += a.face >= 0;
+      from.push_back(p), to.push_back(p + dp), want.push_back(b);
+    }
+    EXPECT_GT(hits, 200);
+    const int n = int(from.size());
+    std::vector<int> face(n), side(n);
+    std::vector<Real> tau(n), u(n), v(n);
+    cast_contacts(ex, bvh, s0.x.data(), s1.x.data(), n, from.data(), to.data(), tol,
+                  ContactHits{face.data(), tau.data(), u.data(), v.data(), side.data()});
+    int fixed = 0;
+    for (int i = 0; i < n; ++i) {
+      ASSERT_TRUE(same_hit(face[i], tau[i], want[i].face, want[i].c.tau, kContactRoundoff))
+          << "particle " << i;
+      if (face[i] < 0) continue;
+      const Tri& t = s0.tris[face[i]];
+      const Vec3 a = s1.x[t.v[0]], b = s1.x[t.v[1]], c = s1.x[t.v[2]];
+      const Vec3 q = a * (1 - u[i] - v[i]) + b * u[i] + c * v[i];
+      const Vec3 end = q + unit_normal(a, b, c) * (Real(side[i]) * Real(0.002) * size);
+      fixed += moving_contact(bv, s0.x.data(), s1.x.data(), from[i], end - from[i], tol).face < 0;
+    }
+    // The fix clears almost every contact at once; what remains is left for another pass.
+    EXPECT_GT(fixed, hits * 9 / 10);
   }
 }
 

@@ -201,17 +201,22 @@ enum Feature : int {
   kEdge20 = 6
 };
 
-struct ClosestOnTriangle {
-  Vec3 point;
-  Real u, v;  // barycentric weights of b and c
+template <class T>
+struct ClosestOnTriangleT {
+  V3<T> point;
+  T u, v;  // barycentric weights of b and c
   int feature;
 };
+using ClosestOnTriangle = ClosestOnTriangleT<Real>;
 
 // Ericson, Real-Time Collision Detection (2005), ClosestPtPointTriangle, with the Voronoi
-// region reported so callers can pick the matching pseudonormal.
-SPHFEM_HD ClosestOnTriangle closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b,
-                                                const Vec3& c) {
-  ClosestOnTriangle r;
+// region reported so callers can pick the matching pseudonormal. In float or double.
+template <class T>
+SPHFEM_HD ClosestOnTriangleT<T> closest_on_triangle(const V3<T>& p, const V3<T>& a,
+                                                    const V3<T>& b, const V3<T>& c) {
+  using Real = T;
+  using Vec3 = V3<T>;
+  ClosestOnTriangleT<T> r;
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
   const Real d1 = dot(ab, ap), d2 = dot(ac, ap);
   if (d1 <= 0 && d2 <= 0) {
@@ -393,13 +398,11 @@ SPHFEM_HD bool point_face_contact(const Vec3& p, const Vec3& dp, const Vec3& a, 
   for (int j = 0; j < m; ++j) {
     const double t = cand[j];
     if (!(t < double(tau_max))) break;
-    // Relative to the particle at time t, so that float keeps the small distances.
     const Vec3d pt = P + dP * t;
-    const Vec3 qa(Vec3d() - pt), qb(B + dB * t - pt), qc(C + dC * t - pt);
-    const ClosestOnTriangle q = closest_on_triangle(Vec3(), qa, qb, qc);
+    const ClosestOnTriangleT<double> q = closest_on_triangle(pt, Vec3d(), B + dB * t, C + dC * t);
     const double fmid = cubic_at(k, 0.5 * (prev + t));
-    if (norm(q.point) <= tol && fmid != 0) {
-      out = Crossing{Real(t), q.u, q.v, fmid > 0 ? 1 : -1};
+    if (norm(pt - q.point) <= double(tol) && fmid != 0) {
+      out = Crossing{Real(t), Real(q.u), Real(q.v), fmid > 0 ? 1 : -1};
       return true;
     }
     prev = t;
