@@ -158,6 +158,36 @@ std::vector<Vec3> moved(const std::vector<Vec3>& x, const Vec3& centre, Vec3 axi
   return y;
 }
 
+// A surface over one step: rotated about its centre, translated (shift in units of its size)
+// and deformed by up to 1 % of its size per vertex.
+struct Swept {
+  Surface s1;
+  Real size;
+  const Surface& s0;
+  Swept(const Surface& s, std::mt19937& rng, Vec3 axis, Real angle, Vec3 shift) : s0(s) {
+    std::uniform_real_distribution<double> U(-1, 1);
+    Vec3 lo, hi;
+    bounds(s.x, lo, hi);
+    size = norm(hi - lo);
+    s1 = s;
+    s1.x = moved(s.x, (lo + hi) * Real(0.5), axis, angle, shift * size);
+    for (Vec3& x : s1.x) x += Vec3(U(rng), U(rng), U(rng)) * Real(0.01) * size;
+  }
+  // A BVH over s0, refit over the step.
+  void build(CpuExec& ex, BvhBuild method, SurfaceBvh<CpuExec>& bvh) const {
+    bvh.build(ex, s0.x.data(), s0.tris.data(), int(s0.tris.size()), method);
+    bvh.refit(ex, s0.x.data(), s1.x.data());
+  }
+  // A particle near a random surface point (within 10 % of the size), moving randomly.
+  void random_path(std::mt19937& rng, Vec3& p, Vec3& dp) const {
+    std::uniform_real_distribution<double> U(-1, 1);
+    const Tri& t = s0.tris[rng() % s0.tris.size()];
+    p = (s0.x[t.v[0]] + s0.x[t.v[1]] + s0.x[t.v[2]]) / Real(3) +
+        random_unit(rng) * Real(0.1 * size * (U(rng) + 1) / 2);
+    dp = random_unit(rng) * Real(0.08 * size * (U(rng) + 1) / 2);
+  }
+};
+
 // Results of the same per-triangle function at different call sites can differ in the last
 // bits (compilers fuse multiply-adds differently where code is inlined): distances agree to
 // a few units of round-off, and a different face is only accepted at a tie within that.
@@ -368,27 +398,17 @@ TEST_P(CollideBvh, MovingSegmentsMatchBruteForce) {
   // velocities of the same size as the faces': the BVH over swept boxes finds exactly the
   // brute-force earliest hit, for several skins.
   std::mt19937 rng(15);
-  std::uniform_real_distribution<double> U(-1, 1);
   for (const Surface& s0 : test_surfaces()) {
-    Vec3 lo, hi;
-    bounds(s0.x, lo, hi);
-    const Real size = norm(hi - lo);
-    const Vec3 centre = (lo + hi) * Real(0.5);
-    Surface s1 = s0;
-    s1.x = moved(s0.x, centre, Vec3(0.3f, 1, -0.5f), Real(0.15), Vec3(0.03f, -0.02f, 0.05f) * size);
-    for (std::size_t i = 0; i < s1.x.size(); ++i)
-      s1.x[i] += Vec3(U(rng), U(rng), U(rng)) * Real(0.01) * size;
+    const Swept w(s0, rng, Vec3(0.3f, 1, -0.5f), Real(0.15), Vec3(0.03f, -0.02f, 0.05f));
+    const Surface& s1 = w.s1;
+    const Real size = w.size;
     SurfaceBvh<CpuExec> bvh;
-    bvh.build(ex, s0.x.data(), s0.tris.data(), int(s0.tris.size()), GetParam());
-    bvh.refit(ex, s0.x.data(), s1.x.data());
+    w.build(ex, GetParam(), bvh);
     const BvhView bv = bvh.view();
     int hits = 0;
     for (int i = 0; i < 2000; ++i) {
-      // Near a random surface point (within 10 % of the size), moving randomly.
-      const Tri& t = s0.tris[rng() % s0.tris.size()];
-      const Vec3 p = (s0.x[t.v[0]] + s0.x[t.v[1]] + s0.x[t.v[2]]) / Real(3) +
-                     random_unit(rng) * Real(0.1 * size * (U(rng) + 1) / 2);
-      const Vec3 dp = random_unit(rng) * Real(0.08 * size * (U(rng) + 1) / 2);
+      Vec3 p, dp;
+      w.random_path(rng, p, dp);
       const Real skin = i % 2 ? Real(0) : Real(0.01) * size;
       const SegmentHit a = moving_nearest(bv, s0.x.data(), s1.x.data(), p, dp, skin);
       const SegmentHit b = brute_moving(s0, s1, p, dp, skin);
@@ -411,29 +431,20 @@ TEST_P(CollideBvh, ExactContactsMatchBruteForce) {
   // swept boxes is the brute-force one over all faces; cast_contacts gives the same, and a
   // particle put a skin in front of the face's new position there meets nothing more.
   std::mt19937 rng(16);
-  std::uniform_real_distribution<double> U(-1, 1);
   for (const Surface& s0 : test_surfaces()) {
-    Vec3 lo, hi;
-    bounds(s0.x, lo, hi);
-    const Real size = norm(hi - lo);
-    const Vec3 centre = (lo + hi) * Real(0.5);
-    Surface s1 = s0;
-    s1.x = moved(s0.x, centre, Vec3(-0.4f, 1, 0.2f), Real(0.2), Vec3(-0.02f, 0.03f, 0.04f) * size);
-    for (std::size_t i = 0; i < s1.x.size(); ++i)
-      s1.x[i] += Vec3(U(rng), U(rng), U(rng)) * Real(0.01) * size;
+    const Swept w(s0, rng, Vec3(-0.4f, 1, 0.2f), Real(0.2), Vec3(-0.02f, 0.03f, 0.04f));
+    const Surface& s1 = w.s1;
+    const Real size = w.size;
     SurfaceBvh<CpuExec> bvh;
-    bvh.build(ex, s0.x.data(), s0.tris.data(), int(s0.tris.size()), GetParam());
-    bvh.refit(ex, s0.x.data(), s1.x.data());
+    w.build(ex, GetParam(), bvh);
     const BvhView bv = bvh.view();
     const Real tol = Real(1e-5) * size;
     std::vector<Vec3> from, to;
     std::vector<ContactHit> want;
     int hits = 0;
     for (int i = 0; i < 2000; ++i) {
-      const Tri& t = s0.tris[rng() % s0.tris.size()];
-      const Vec3 p = (s0.x[t.v[0]] + s0.x[t.v[1]] + s0.x[t.v[2]]) / Real(3) +
-                     random_unit(rng) * Real(0.1 * size * (U(rng) + 1) / 2);
-      const Vec3 dp = random_unit(rng) * Real(0.08 * size * (U(rng) + 1) / 2);
+      Vec3 p, dp;
+      w.random_path(rng, p, dp);
       const ContactHit a = moving_contact(bv, s0.x.data(), s1.x.data(), p, dp, tol);
       const ContactHit b = brute_contact(s0, s1, p, dp, tol);
       ASSERT_TRUE(same_hit(a.face, a.c.tau, b.face, b.c.tau, kContactRoundoff)) << "particle " << i;

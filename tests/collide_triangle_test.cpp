@@ -190,8 +190,8 @@ TEST(CollideTriangle, ExactContactOfATranslatingFace) {
   EXPECT_FALSE(point_face_contact(Vec3(), d, a, b, c, d, d, d, 1e-6f, 2, k));
   // A particle ending exactly on the face touches it at the step's end; one passing the
   // face's plane beside the triangle does not.
-  ASSERT_TRUE(point_face_contact(Vec3(), Vec3(0, 0, 0.1f), a, b, c, Vec3(), Vec3(), Vec3(), 1e-6f,
-                                 2, k));
+  ASSERT_TRUE(
+      point_face_contact(Vec3(), Vec3(0, 0, 0.1f), a, b, c, Vec3(), Vec3(), Vec3(), 1e-6f, 2, k));
   EXPECT_NEAR(k.tau, 1, 1e-6);
   EXPECT_FALSE(point_face_contact(Vec3(3, 0, 0), Vec3(), a, b, c, d, d, d, 1e-6f, 2, k));
   // A contact later than tau_max is not reported.
@@ -249,11 +249,12 @@ TEST(CollideTriangle, ExactContactMatchesFineSamplingOfTurningFaces) {
       x0[k] = Vec3d(U(rng), U(rng), 0.2 * U(rng));
       dx[k] = Vec3d(0.6 * U(rng), 0.6 * U(rng), 1.2 * U(rng));
     }
-    const Vec3d p(0.3 * U(rng), 0.3 * U(rng), 0.6 * U(rng)), dp(0.3 * U(rng), 0.3 * U(rng), 0.3 * U(rng));
+    const Vec3d p(0.3 * U(rng), 0.3 * U(rng), 0.6 * U(rng)),
+        dp(0.3 * U(rng), 0.3 * U(rng), 0.3 * U(rng));
     // Inputs in float, as the simulation has them; the reference sees the same values.
     Vec3 xf[3], df[3];
-    for (int k = 0; k < 3; ++k) xf[k] = Vec3(x0[k]), df[k] = Vec3(dx[k]), x0[k] = Vec3d(xf[k]),
-                                dx[k] = Vec3d(df[k]);
+    for (int k = 0; k < 3; ++k)
+      xf[k] = Vec3(x0[k]), df[k] = Vec3(dx[k]), x0[k] = Vec3d(xf[k]), dx[k] = Vec3d(df[k]);
     const Vec3 pf(p), dpf(dp);
     const double ref = sampled_contact(Vec3d(pf), Vec3d(dpf), x0, dx);
     if (ref == -2) continue;

@@ -389,7 +389,7 @@ void closest_points(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x, int n,
   template void cast_moving<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, const Vec3*, int,   \
                                   const Vec3*, const Vec3*, Real, Real, SegmentHits, int, bool);   \
   template void cast_contacts<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, const Vec3*, int, \
-                                    const Vec3*, const Vec3*, Real, ContactHits);                 \
+                                    const Vec3*, const Vec3*, Real, ContactHits);                  \
   template void count_crossings<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, int,            \
                                       const Vec3*, const Vec3*, int*);                             \
   template void inside_closed<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, int, const Vec3*, \

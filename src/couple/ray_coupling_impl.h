@@ -258,8 +258,7 @@ class RayCouplingT final : public RayCoupling {
       grow_buffer(*b, n);
     for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_}) grow_buffer(*b, n);
     grow_buffer(near_face_, n);
-    for (Buffer<Vec3>* b : {&x_pre_, &rel_, &near_n_, &near_vel_, &near_dv_})
-      grow_buffer(*b, n);
+    for (Buffer<Vec3>* b : {&x_pre_, &rel_, &near_n_, &near_vel_, &near_dv_}) grow_buffer(*b, n);
   }
 
   void copy(Vec3* dst, const Vec3* src, int n) {
@@ -377,8 +376,8 @@ class RayCouplingT final : public RayCoupling {
       const auto t0 = Clock::now();
       cast_contacts(ex_, body_bvh_, x_old_.data(), a.x, n, pre, x, tol,
                     ContactHits{face, tau, hu, hv, side});
-      const double c =
-          reduce_sum(ex_, n, [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; });
+      const double c = reduce_sum(
+          ex_, n, [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; });
       crossed = long(c + 0.5);
       (pass == 0 ? stats_.ms_leak_check : stats_.ms_couple) += ms_since(t0);
       if (crossed == 0 || pass == kPasses - 1) break;

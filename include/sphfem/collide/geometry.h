@@ -212,8 +212,8 @@ using ClosestOnTriangle = ClosestOnTriangleT<Real>;
 // Ericson, Real-Time Collision Detection (2005), ClosestPtPointTriangle, with the Voronoi
 // region reported so callers can pick the matching pseudonormal. In float or double.
 template <class T>
-SPHFEM_HD ClosestOnTriangleT<T> closest_on_triangle(const V3<T>& p, const V3<T>& a,
-                                                    const V3<T>& b, const V3<T>& c) {
+SPHFEM_HD ClosestOnTriangleT<T> closest_on_triangle(const V3<T>& p, const V3<T>& a, const V3<T>& b,
+                                                    const V3<T>& c) {
   using Real = T;
   using Vec3 = V3<T>;
   ClosestOnTriangleT<T> r;

@@ -2,9 +2,10 @@
 // bodies take the same dt, their surface BVH is refit over the step, every particle casts one
 // ray along its motion relative to the surfaces (bodies and, optionally, the tank's faces as
 // static colliders), the drift stops a skin short of the nearest hit (eq. 6), and after the
-// drift the Coupler exchanges impulses per face. A second cast of each particle's actual
-// relative displacement finds the particles that crossed a surface anyway (another face than
-// the nearest one), puts them back and counts what still crosses (`crossed`), so leakage is
+// drift the Coupler exchanges impulses per face. An exact test of each particle's actual path
+// against every body face moving linearly over the step finds the particles that met a
+// surface anyway (another face than the nearest one, or a face that turned within the step),
+// puts them a skin in front of it and counts what still meets one (`crossed`), so leakage is
 // measured every step rather than assumed away.
 #pragma once
 
@@ -50,7 +51,7 @@ struct RayCouplingStats {
   long steps = 0;
   long contacts = 0;   // particle-face hits that went to the coupler
   long crossed = 0;    // particles whose displacement crossed a body surface (goal: 0)
-  long corrected = 0;  // crossings found by the re-cast and put back in front of the face
+  long corrected = 0;  // contacts found after the drift and put back in front of the face
   int rebuilds = 0;
   long near_surface = 0;  // particle-steps with a body surface within the kernel's support
   double ms_fem = 0, ms_collide = 0, ms_couple = 0, ms_leak_check = 0;
