@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <vector>
 
+#include "sph_profile.h"
 #include "sphfem/sph/solver.h"
 
 using namespace sphfem;
@@ -37,45 +38,24 @@ Result settle(SolverKind solver, double seconds) {
   auto sim = make_fluid_solver(m, Backend::Cpu);
   Result r{};
   while (sim->time() < seconds) r.clamped += sim->step(seconds - sim->time()).clamped;
-  // Average the last 0.1 s of snapshots to tame SPH pressure noise.
-  const int nbins = 20;
-  std::vector<double> psum(nbins, 0.0), ysum(nbins, 0.0);
-  std::vector<int> cnt(nbins, 0);
-  double top = 0;
+  // Average the last 0.1 s of snapshots to tame SPH pressure noise. A vertical line through
+  // the middle of the tank, one particle spacing wide.
+  test::PressureProfile profile(20, 0.4, 0.1, 0.1, 0.02);
   FluidSnapshot snap;
-  int samples = 0;
   for (double t_end = sim->time() + 0.1; sim->time() < t_end - 1e-9;) {
     r.clamped += sim->step(t_end - sim->time()).clamped;
     if (sim->steps() % 10) continue;
     sim->snapshot(snap);
-    ++samples;
-    double ymax = 0;
+    profile.add(snap);
     for (int i = 0; i < snap.n; ++i) {
       const Vec3 x = snap.x[i];
-      ymax = std::max(ymax, double(x.y));
       r.max_compression = std::max(r.max_compression, double(snap.rho[i]) / 1000.0 - 1.0);
       if (x.x < 0 || x.x > 0.2 || x.y < 0 || x.y > 0.6 || x.z < 0 || x.z > 0.2) ++r.outside;
-      // A vertical line through the middle of the tank, one particle spacing wide.
-      if (std::fabs(x.x - 0.1) > 0.02 || std::fabs(x.z - 0.1) > 0.02) continue;
-      const int b = std::min(nbins - 1, int(x.y / 0.4 * nbins));
-      psum[b] += snap.p[i];
-      ysum[b] += x.y;
-      ++cnt[b];
     }
-    top += ymax;
   }
   // Free surface: the top particle centres plus half a spacing.
-  r.height = top / samples + 0.01;
-  double num = 0, den = 0;
-  for (int b = 0; b < nbins; ++b) {
-    if (!cnt[b]) continue;
-    const double y = ysum[b] / cnt[b];
-    const double exact = 1000.0 * 9.81 * (r.height - y);
-    num += std::pow(psum[b] / cnt[b] - exact, 2);
-    if (std::getenv("SPHFEM_VERBOSE")) std::printf("y %.3f p %.1f exact %.1f\n", y, psum[b] / cnt[b], exact);
-    den += exact * exact;
-  }
-  r.l2_pressure_error = std::sqrt(num / den);
+  r.height = profile.surface(0.01);
+  r.l2_pressure_error = profile.against(r.height).l2;
   return r;
 }
 
@@ -93,6 +73,8 @@ TEST_P(SphHydrostatic, PressureFollowsDepthAndNothingLeaves) {
 
 INSTANTIATE_TEST_SUITE_P(Solvers, SphHydrostatic,
                          ::testing::Values(SolverKind::WCSPH, SolverKind::DFSPH),
-                         [](const auto& i) { return i.param == SolverKind::WCSPH ? "WCSPH" : "DFSPH"; });
+                         [](const auto& i) {
+                           return i.param == SolverKind::WCSPH ? "WCSPH" : "DFSPH";
+                         });
 
 }  // namespace

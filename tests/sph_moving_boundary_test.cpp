@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "sph_profile.h"
 #include "sphfem/fem/mesh.h"
 #include "sphfem/sph/moving_boundary.h"
 #include "sphfem/sph/solver.h"
@@ -191,11 +192,7 @@ CupResult settle_in_cup(SolverKind solver) {
                   momentum(*sim).y, hook.step_impulse.y / dt);
     }
   }
-  const int nbins = 15;
-  std::vector<double> psum(nbins, 0.0), ysum(nbins, 0.0);
-  std::vector<int> cnt(nbins, 0);
-  double top = 0;
-  int samples = 0;
+  test::PressureProfile profile(15, kGap + kDepth, kWidth / 2, kWidth / 2, kSpacing);
   Vec3d impulse;
   FluidSnapshot snap;
   const double t0 = sim->time();
@@ -210,21 +207,12 @@ CupResult settle_in_cup(SolverKind solver) {
     impulse += hook.step_impulse;
     if (sim->steps() % 10) continue;
     sim->snapshot(snap);
-    ++samples;
-    double ymax = 0;
+    profile.add(snap);
     for (int i = 0; i < snap.n; ++i) {
       const Vec3 x = snap.x[i];
-      ymax = std::max(ymax, double(x.y));
       r.max_compression = std::max(r.max_compression, double(snap.rho[i]) / 1000.0 - 1.0);
       if (x.x < 0 || x.x > kWidth || x.y < 0 || x.z < 0 || x.z > kWidth) ++r.outside;
-      if (std::fabs(x.x - kWidth / 2) > kSpacing || std::fabs(x.z - kWidth / 2) > kSpacing)
-        continue;
-      const int b = std::max(0, std::min(nbins - 1, int(x.y / (kGap + kDepth) * nbins)));
-      psum[b] += snap.p[i];
-      ysum[b] += x.y;
-      ++cnt[b];
     }
-    top += ymax;
   }
   const Vec3d force = impulse / (sim->time() - t0);
   if (std::getenv("SPHFEM_VERBOSE")) {
@@ -244,19 +232,9 @@ CupResult settle_in_cup(SolverKind solver) {
   const double weight = double(sim->count()) * double(sim->model().params.mass) * 9.81;
   r.weight_error = -force.y / weight - 1;
   r.sideways = std::sqrt(force.x * force.x + force.z * force.z) / weight;
-  const double height = top / samples + kRadius;
-  double num = 0, den = 0;
-  bool bottom = true;  // the lowest bin that holds fluid (the first can lie below the fluid)
-  for (int b = 0; b < nbins; ++b) {
-    if (!cnt[b]) continue;
-    const double y = ysum[b] / cnt[b], p = psum[b] / cnt[b];
-    const double exact = 1000.0 * 9.81 * (height - y);
-    if (bottom) r.bottom_pressure_error = p / exact - 1, bottom = false;
-    num += (p - exact) * (p - exact);
-    den += exact * exact;
-    if (std::getenv("SPHFEM_VERBOSE")) std::printf("y %.3f p %.1f exact %.1f\n", y, p, exact);
-  }
-  r.l2_pressure_error = std::sqrt(num / den);
+  const test::PressureProfile::Error e = profile.against(profile.surface(kRadius));
+  r.l2_pressure_error = e.l2;
+  r.bottom_pressure_error = e.bottom;
   return r;
 }
 

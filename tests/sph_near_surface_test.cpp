@@ -13,6 +13,7 @@
 #include <memory>
 #include <vector>
 
+#include "sph_profile.h"
 #include "sphfem/collide/collider.h"
 #include "sphfem/couple/coupler.h"
 #include "sphfem/fem/mesh.h"
@@ -155,10 +156,9 @@ ColumnResult settle(SolverKind solver, StepHook& hook, double seconds) {
   sim->set_hook(&hook);
   ColumnResult r{};
   while (sim->time() < seconds) r.clamped += sim->step(seconds - sim->time()).clamped;
-  const int nbins = 15;
-  std::vector<double> psum(nbins, 0.0), ysum(nbins, 0.0);
-  std::vector<int> cnt(nbins, 0);
-  double top = 0, rho_bottom = 0;
+  // A vertical line through the middle, away from the tank's side walls.
+  test::PressureProfile profile(15, kDepth, kWidth / 2, kWidth / 2, kSpacing);
+  double rho_bottom = 0;
   long n_bottom = 0;
   int samples = 0;
   FluidSnapshot snap;
@@ -166,39 +166,20 @@ ColumnResult settle(SolverKind solver, StepHook& hook, double seconds) {
     r.clamped += sim->step(t_end - sim->time()).clamped;
     if (sim->steps() % 10) continue;
     sim->snapshot(snap);
+    profile.add(snap);
     ++samples;
-    double ymax = 0;
     for (int i = 0; i < snap.n; ++i) {
-      const Vec3 x = snap.x[i];
       const double rel = double(snap.rho[i]) / 1000.0 - 1.0;
-      ymax = std::max(ymax, double(x.y));
       r.max_compression = std::max(r.max_compression, rel);
-      if (x.y < kSpacing) rho_bottom += rel, ++n_bottom;
-      // A vertical line through the middle, away from the tank's side walls.
-      if (std::fabs(x.x - kWidth / 2) > kSpacing || std::fabs(x.z - kWidth / 2) > kSpacing)
-        continue;
-      const int b = std::max(0, std::min(nbins - 1, int(x.y / kDepth * nbins)));
-      psum[b] += snap.p[i];
-      ysum[b] += x.y;
-      ++cnt[b];
+      if (snap.x[i].y < kSpacing) rho_bottom += rel, ++n_bottom;
     }
-    top += ymax;
   }
   r.bottom_density = rho_bottom / std::max<long>(n_bottom, 1);
   const double layer = (kWidth / kSpacing) * (kWidth / kSpacing);
   r.bottom_count = double(n_bottom) / samples / layer;
-  const double height = top / samples + kRadius;
-  double num = 0, den = 0;
-  for (int b = 0; b < nbins; ++b) {
-    if (!cnt[b]) continue;
-    const double y = ysum[b] / cnt[b], p = psum[b] / cnt[b];
-    const double exact = 1000.0 * 9.81 * (height - y);
-    if (b == 0) r.bottom_pressure_error = p / exact - 1;
-    num += (p - exact) * (p - exact);
-    den += exact * exact;
-    if (std::getenv("SPHFEM_VERBOSE")) std::printf("y %.3f p %.1f exact %.1f\n", y, p, exact);
-  }
-  r.l2_pressure_error = std::sqrt(num / den);
+  const test::PressureProfile::Error e = profile.against(profile.surface(kRadius));
+  r.l2_pressure_error = e.l2;
+  r.bottom_pressure_error = e.bottom;
   return r;
 }
 

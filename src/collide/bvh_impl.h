@@ -308,13 +308,13 @@ void cast_rays(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x, int n, cons
 template <class Exec>
 void cast_moving(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x_old, const Vec3* x_new, int n,
                  const Vec3* p, const Vec3* vel, Real dt, Real skin, SegmentHits out,
-                 int face_offset, bool merge) {
+                 int face_offset, bool merge, bool front_only) {
   if (merge && !out.len)
     throw std::invalid_argument("cast_moving: merging hits needs the len array");
   const collide::BvhView bv = bvh.view();
   parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) {
     const collide::SegmentHit h =
-        collide::moving_nearest(bv, x_old, x_new, p[i], vel[i] * dt, skin);
+        collide::moving_nearest(bv, x_old, x_new, p[i], vel[i] * dt, skin, front_only);
     if (merge) {
       if (h.face < 0) return;
       const int f = out.face[i];
@@ -332,11 +332,12 @@ void cast_moving(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x_old, const
 
 template <class Exec>
 void cast_contacts(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x_old, const Vec3* x_new,
-                   int n, const Vec3* from, const Vec3* to, Real tol, ContactHits out) {
+                   int n, const Vec3* from, const Vec3* to, Real tol, ContactHits out,
+                   bool front_only) {
   const collide::BvhView bv = bvh.view();
   parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) {
     const collide::ContactHit h =
-        collide::moving_contact(bv, x_old, x_new, from[i], to[i] - from[i], tol);
+        collide::moving_contact(bv, x_old, x_new, from[i], to[i] - from[i], tol, front_only);
     out.face[i] = h.face;
     if (out.tau) out.tau[i] = h.c.tau;
     if (out.u) out.u[i] = h.c.u;
@@ -387,9 +388,10 @@ void closest_points(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x, int n,
   template void cast_rays<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, int, const Vec3*,     \
                                 const Vec3*, const Real*, RayHits);                                \
   template void cast_moving<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, const Vec3*, int,   \
-                                  const Vec3*, const Vec3*, Real, Real, SegmentHits, int, bool);   \
+                                  const Vec3*, const Vec3*, Real, Real, SegmentHits, int, bool,    \
+                                  bool);                                                           \
   template void cast_contacts<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, const Vec3*, int, \
-                                    const Vec3*, const Vec3*, Real, ContactHits);                  \
+                                    const Vec3*, const Vec3*, Real, ContactHits, bool);            \
   template void count_crossings<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, int,            \
                                       const Vec3*, const Vec3*, int*);                             \
   template void inside_closed<EXEC>(EXEC&, const SurfaceBvh<EXEC>&, const Vec3*, int, const Vec3*, \

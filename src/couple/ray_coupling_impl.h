@@ -4,6 +4,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -139,8 +141,10 @@ class RayCouplingT final : public RayCoupling {
     if (body_tris_ > 0) {
       const BodyArrays a = bodies_->arrays();
       refit_bodies();
+      // Front faces only: a particle inside a body (an inverted element) is let out.
       cast_moving(ex_, body_bvh_, x_old_.data(), a.x, n, f.x, f.v, rdt, skin,
-                  SegmentHits{face_.data(), t_.data(), u_.data(), v_.data(), len_.data(), nullptr});
+                  SegmentHits{face_.data(), t_.data(), u_.data(), v_.data(), len_.data(), nullptr},
+                  0, false, true);
     } else {
       fill_no_hit(n);
     }
@@ -356,10 +360,11 @@ class RayCouplingT final : public RayCoupling {
   // be crossed by another face moving differently (a cloth edge beside a wall, a concave
   // corner), or by a face that turns within the step. So each particle's actual path over the
   // step is tested again, exactly, against every body face moving linearly from its old to
-  // its new position (collide::moving_contact). A particle that met a face is put a skin in
-  // front of that face's new position, on the side it came from, and tested again. The first
-  // test is the leak check; what still meets a face after the last pass is counted in
-  // `crossed`. The baseline (passes = 1) only counts.
+  // its new position (collide::moving_contact). A particle that met a face from in front is
+  // put a skin in front of that face's new position and tested again; one leaving a body from
+  // behind its faces (let in by an inverted element) is let go. The first test is the leak
+  // check; what still meets a face after the last pass is counted in `crossed`. The baseline
+  // (passes = 1) only counts.
   long resolve_crossings(const FluidArrays& f, int kPasses) {
     const int n = f.n;
     Vec3* x = f.x;
@@ -375,11 +380,20 @@ class RayCouplingT final : public RayCoupling {
     for (int pass = 0; pass < kPasses; ++pass) {
       const auto t0 = Clock::now();
       cast_contacts(ex_, body_bvh_, x_old_.data(), a.x, n, pre, x, tol,
-                    ContactHits{face, tau, hu, hv, side});
+                    ContactHits{face, tau, hu, hv, side}, true);
       const double c = reduce_sum(
           ex_, n, [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; });
       crossed = long(c + 0.5);
       (pass == 0 ? stats_.ms_leak_check : stats_.ms_couple) += ms_since(t0);
+      if (crossed > 0 && std::getenv("SPHFEM_DEBUG_LEAK") && Exec::kSpace == MemSpace::Host) {
+        for (int i = 0; i < n; ++i)
+          if (face[i] >= 0)
+            std::fprintf(stderr,
+                         "pass %d particle %d pre %.6f %.6f %.6f x %.6f %.6f %.6f face %d tau %.6f "
+                         "side %d\n",
+                         pass, i, pre[i].x, pre[i].y, pre[i].z, x[i].x, x[i].y, x[i].z, face[i],
+                         tau[i], side[i]);
+      }
       if (crossed == 0 || pass == kPasses - 1) break;
       const auto t1 = Clock::now();
       const Vec3* nx = a.x;

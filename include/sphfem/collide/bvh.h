@@ -120,18 +120,20 @@ void cast_rays(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x, int n, cons
 // particle, by the time t / len within the step. Reported face ids are the BVH's plus
 // face_offset. With merge, a particle's entry is only replaced by an earlier hit (out.len is
 // then required): one call per triangle set (bodies, static colliders) gives the earliest
-// hit over all sets in the numbering "set k's face i = faces of sets 0..k-1 + i".
+// hit over all sets in the numbering "set k's face i = faces of sets 0..k-1 + i". With
+// front_only, faces a particle starts behind are skipped (collide::moving_nearest).
 template <class Exec>
 void cast_moving(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x_old, const Vec3* x_new, int n,
                  const Vec3* p, const Vec3* vel, Real dt, Real skin, SegmentHits out,
-                 int face_offset = 0, bool merge = false);
+                 int face_offset = 0, bool merge = false, bool front_only = false);
 
 // The earliest exact contact (within tol) of each particle's straight path from[i] -> to[i]
 // over a step with the faces moving linearly from x_old to x_new (bvh refit with
-// refit(ex, x_old, x_new)): collide::moving_contact.
+// refit(ex, x_old, x_new)): collide::moving_contact, front_only as there.
 template <class Exec>
 void cast_contacts(Exec& ex, const SurfaceBvh<Exec>& bvh, const Vec3* x_old, const Vec3* x_new,
-                   int n, const Vec3* from, const Vec3* to, Real tol, ContactHits out);
+                   int n, const Vec3* from, const Vec3* to, Real tol, ContactHits out,
+                   bool front_only = false);
 
 // Number of faces the segment from[i] -> to[i] crosses.
 template <class Exec>

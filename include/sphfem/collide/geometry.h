@@ -382,9 +382,10 @@ SPHFEM_HD int contact_candidates(const double k[4], double out[6]) {
 // follows every vertex's own motion, so a face that turns or stretches within the step is
 // caught exactly. Rounding is covered by tol, which also makes shared edges count on both
 // faces. A particle that starts on the face's plane and touches nothing else is no crossing.
+// With front_only, contacts from behind the face (side -1) are passed over.
 SPHFEM_HD bool point_face_contact(const Vec3& p, const Vec3& dp, const Vec3& a, const Vec3& b,
                                   const Vec3& c, const Vec3& da, const Vec3& db, const Vec3& dc,
-                                  Real tol, Real tau_max, Crossing& out) {
+                                  Real tol, Real tau_max, Crossing& out, bool front_only = false) {
   const Vec3d A(a), dA(da);
   const Vec3d P = Vec3d(p) - A, dP = Vec3d(dp) - dA;
   const Vec3d B = Vec3d(b) - A, dB = Vec3d(db) - dA;
@@ -401,7 +402,7 @@ SPHFEM_HD bool point_face_contact(const Vec3& p, const Vec3& dp, const Vec3& a, 
     const Vec3d pt = P + dP * t;
     const ClosestOnTriangleT<double> q = closest_on_triangle(pt, Vec3d(), B + dB * t, C + dC * t);
     const double fmid = cubic_at(k, 0.5 * (prev + t));
-    if (norm(pt - q.point) <= double(tol) && fmid != 0) {
+    if (norm(pt - q.point) <= double(tol) && (front_only ? fmid > 0 : fmid != 0)) {
       out = Crossing{Real(t), Real(q.u), Real(q.v), fmid > 0 ? 1 : -1};
       return true;
     }

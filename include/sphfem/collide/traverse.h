@@ -205,11 +205,13 @@ struct MovingVisit {
   const Vec3 *x_old, *x_new;
   Vec3 p, dp;
   Real skin;
+  bool front_only;
   Real best = Real(FLT_MAX);  // time of the hit, in steps
   SegmentHit h;
   SPHFEM_HD void operator()(int f) {
     const Tri tr = bv.tris[f];
     const Vec3 a = x_old[tr.v[0]], b = x_old[tr.v[1]], c = x_old[tr.v[2]];
+    if (front_only && dot(p - a, cross(b - a, c - a)) < Real(0)) return;
     MovingHit m;
     if (!moving_triangle(p, dp, skin, a, b, c, x_new[tr.v[0]] - a, x_new[tr.v[1]] - b,
                          x_new[tr.v[2]] - c, m))
@@ -226,10 +228,14 @@ struct MovingVisit {
 // against faces moving from x_old to x_new. The particle's own path p -> p + dp passes
 // through every box that can hold a hit, once the boxes grow by skin (a hit in the skin
 // beyond the step lies in a box the path's end point touches). Returns the earliest hit in
-// the step's time, t / len (ties to the lower face id).
+// the step's time, t / len (ties to the lower face id). With front_only, faces the particle
+// starts behind are skipped: behind a face of a closed, outward-oriented surface is inside the
+// body, and a particle there (an inverted element, a fluid block placed over a body) must be
+// let out, not held in. From outside, the earliest hit is a front face anyway.
 SPHFEM_HD SegmentHit moving_nearest(const BvhView& bv, const Vec3* x_old, const Vec3* x_new,
-                                    const Vec3& p, const Vec3& dp, Real skin) {
-  MovingVisit visit{bv, x_old, x_new, p, dp, skin, Real(FLT_MAX), SegmentHit()};
+                                    const Vec3& p, const Vec3& dp, Real skin,
+                                    bool front_only = false) {
+  MovingVisit visit{bv, x_old, x_new, p, dp, skin, front_only, Real(FLT_MAX), SegmentHit()};
   descend_path(bv, p, dp, skin, visit);
   return visit.h;
 }
@@ -246,6 +252,7 @@ struct ContactVisit {
   const Vec3 *x_old, *x_new;
   Vec3 p, dp;
   Real tol;
+  bool front_only;
   Real best = Real(2);  // beyond the step: nothing found yet
   ContactHit h;
   SPHFEM_HD void operator()(int f) {
@@ -254,7 +261,7 @@ struct ContactVisit {
     Crossing k;
     // A little beyond best, so that ties go to the lower face id (closer) in any visit order.
     if (!point_face_contact(p, dp, a, b, c, x_new[tr.v[0]] - a, x_new[tr.v[1]] - b,
-                            x_new[tr.v[2]] - c, tol, best * slab_slack(), k))
+                            x_new[tr.v[2]] - c, tol, best * slab_slack(), k, front_only))
       return;
     if (closer(k.tau, f, best, h.face)) {
       best = k.tau;
@@ -263,9 +270,12 @@ struct ContactVisit {
   }
 };
 
+// With front_only, only contacts from in front of a face count (entries into a closed,
+// outward-oriented body; see moving_nearest).
 SPHFEM_HD ContactHit moving_contact(const BvhView& bv, const Vec3* x_old, const Vec3* x_new,
-                                    const Vec3& p, const Vec3& dp, Real tol) {
-  ContactVisit visit{bv, x_old, x_new, p, dp, tol, Real(2), ContactHit()};
+                                    const Vec3& p, const Vec3& dp, Real tol,
+                                    bool front_only = false) {
+  ContactVisit visit{bv, x_old, x_new, p, dp, tol, front_only, Real(2), ContactHit()};
   descend_path(bv, p, dp, tol, visit);
   return visit.h;
 }
