@@ -4,8 +4,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -385,15 +383,6 @@ class RayCouplingT final : public RayCoupling {
           ex_, n, [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; });
       crossed = long(c + 0.5);
       (pass == 0 ? stats_.ms_leak_check : stats_.ms_couple) += ms_since(t0);
-      if (crossed > 0 && std::getenv("SPHFEM_DEBUG_LEAK") && Exec::kSpace == MemSpace::Host) {
-        for (int i = 0; i < n; ++i)
-          if (face[i] >= 0)
-            std::fprintf(stderr,
-                         "pass %d particle %d pre %.6f %.6f %.6f x %.6f %.6f %.6f face %d tau %.6f "
-                         "side %d\n",
-                         pass, i, pre[i].x, pre[i].y, pre[i].z, x[i].x, x[i].y, x[i].z, face[i],
-                         tau[i], side[i]);
-      }
       if (crossed == 0 || pass == kPasses - 1) break;
       const auto t1 = Clock::now();
       const Vec3* nx = a.x;
