@@ -595,6 +595,34 @@ TEST_P(CollideBvh, SkinReachesFacesJustBeyondTheStep) {
   }
 }
 
+TEST_P(CollideBvh, FrontOnlyLetsParticlesOutOfABodyButNotIn) {
+  // A sphere of radius 0.5 at rest; particles just inside and just outside its surface, moving
+  // radially by 0.05 over the step. With front_only, the ray and the exact test let the inner
+  // ones out (no hit) and still stop the outer ones moving in; without, both are hit.
+  const Surface s = surface_of(make_sphere(Vec3d(0, 0, 0), 0.5, 10));
+  SurfaceBvh<CpuExec> bvh;
+  bvh.build(ex, s.x.data(), s.tris.data(), int(s.tris.size()), GetParam());
+  bvh.refit(ex, s.x.data(), s.x.data());
+  const BvhView bv = bvh.view();
+  std::mt19937 rng(23);
+  for (int i = 0; i < 500; ++i) {
+    const Vec3 d = random_unit(rng);
+    const Vec3 in = d * Real(0.45), out = d * Real(0.55);
+    const Vec3 leave = d * Real(0.1), enter = d * Real(-0.1);
+    const Real tol = 1e-6f;
+    EXPECT_GE(moving_nearest(bv, s.x.data(), s.x.data(), in, leave, 0).face, 0);
+    EXPECT_EQ(moving_nearest(bv, s.x.data(), s.x.data(), in, leave, 0, true).face, -1) << i;
+    EXPECT_GE(moving_nearest(bv, s.x.data(), s.x.data(), out, enter, 0, true).face, 0) << i;
+    const ContactHit exit_all = moving_contact(bv, s.x.data(), s.x.data(), in, leave, tol);
+    ASSERT_GE(exit_all.face, 0);
+    EXPECT_EQ(exit_all.c.side, -1);
+    EXPECT_EQ(moving_contact(bv, s.x.data(), s.x.data(), in, leave, tol, true).face, -1) << i;
+    const ContactHit entry = moving_contact(bv, s.x.data(), s.x.data(), out, enter, tol, true);
+    ASSERT_GE(entry.face, 0) << i;
+    EXPECT_EQ(entry.c.side, 1);
+  }
+}
+
 TEST_P(CollideBvh, ClosestPointsMatchBruteForceWithSign) {
   // Closest points within a radius equal brute force; the pseudonormal sign agrees with the
   // winding number, also near the cup's rims and concave edges and the box's corners.

@@ -254,3 +254,30 @@ TEST(CoupleScenes, LowDensityTubeIsPushedFurther) {
 
 }  // namespace
 }  // namespace sphfem
+
+namespace sphfem {
+namespace {
+
+// Fluid placed over a body (a block that overlaps a pinned box): the particles that start
+// inside the box leave it through its faces, which stop only particles coming from outside,
+// and none goes back in.
+TEST(CoupleScenes, FluidStartingInsideABodyLeavesIt) {
+  Coupled c(json::parse(R"({
+    "simulation": {"solver": "dfsph", "dt_max": 0.002},
+    "fluid": {"particle_radius": 0.005, "viscosity": 1e-5,
+              "blocks": [{"min": [0.02, 0.0, 0.02], "max": [0.18, 0.12, 0.18]}]},
+    "domain": {"min": [0, 0, 0], "max": [0.3, 0.3, 0.3]},
+    "bodies": [{"name": "box", "shape": "box", "position": [0.15, 0.05, 0.15],
+                "size": [0.06, 0.06, 0.06], "resolution": 4,
+                "material": {"density": 1000, "young": 1e6, "poisson": 0.3},
+                "pinned": {"boxes": [{"min": [0.11, 0.019, 0.11], "max": [0.19, 0.021, 0.19]}]}}]
+  })"));
+  const long at_start = c.sim->count_inside();
+  ASSERT_GT(at_start, 5);
+  c.run_to(0.4);
+  EXPECT_EQ(c.sim->count_inside(), 0) << at_start << " particles started inside the box";
+  EXPECT_EQ(c.crossed, 0);
+}
+
+}  // namespace
+}  // namespace sphfem
