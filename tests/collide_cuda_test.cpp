@@ -1,7 +1,7 @@
 // The CUDA backend runs the same BVH code as the CPU: LBVH build, swept refit and every
-// query on a moving cup agree with the CPU's SAH tree (nearest faces equal except at ties
-// within round-off; distances to single-precision round-off, as the GPU fuses
-// multiply-adds). Skips without a usable GPU.
+// query (the exact contact test included) on a moving cup agree with the CPU's SAH tree (nearest
+// faces equal except at ties within round-off; distances to single-precision round-off, as the GPU
+// fuses multiply-adds). Skips without a usable GPU.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -55,11 +55,15 @@ TEST(CollideCuda, MatchesCpu) {
   const auto rg = gpu->cast_rays(p, d, {});
   const auto mc = cpu->cast_moving(p, vel, 0.01f, 0.002f);
   const auto mg = gpu->cast_moving(p, vel, 0.01f, 0.002f);
+  std::vector<Vec3> to(n);
+  for (int i = 0; i < n; ++i) to[i] = p[i] + vel[i] * Real(0.01);
+  const auto kc = cpu->contacts(p, to, 1e-6f, true);
+  const auto kg = gpu->contacts(p, to, 1e-6f, true);
   const auto ic = cpu->inside(p);
   const auto ig = gpu->inside(p);
   const auto cc = cpu->closest(p, 0.05f);
   const auto cg = gpu->closest(p, 0.05f);
-  int ray_hits = 0, moving_hits = 0;
+  int ray_hits = 0, moving_hits = 0, contact_hits = 0;
   for (int i = 0; i < n; ++i) {
     ASSERT_TRUE(same(rg[i].face, rg[i].t, rc[i].face, rc[i].t)) << "ray " << i;
     ASSERT_TRUE(same(mg[i].face, mg[i].t / (mg[i].face >= 0 ? mg[i].len : 1), mc[i].face,
@@ -68,9 +72,12 @@ TEST(CollideCuda, MatchesCpu) {
     ASSERT_TRUE(same(cg[i].face, cg[i].dist, cc[i].face, cc[i].dist)) << "closest " << i;
     if (cc[i].face >= 0 && cc[i].dist > 1e-4) { EXPECT_EQ(cg[i].side, cc[i].side) << i; }
     EXPECT_EQ(ig[i], ic[i]) << "inside " << i;
+    ASSERT_TRUE(same(kg[i].face, kg[i].c.tau, kc[i].face, kc[i].c.tau)) << "contact " << i;
+    contact_hits += kc[i].face >= 0;
     ray_hits += rc[i].face >= 0;
     moving_hits += mc[i].face >= 0;
   }
   EXPECT_GT(ray_hits, n / 10);
   EXPECT_GT(moving_hits, n / 100);
+  EXPECT_GT(contact_hits, n / 200);
 }

@@ -107,6 +107,27 @@ class ColliderT final : public Collider {
     return out;
   }
 
+  std::vector<collide::ContactHit> contacts(const std::vector<Vec3>& from,
+                                            const std::vector<Vec3>& to, Real tol,
+                                            bool front_only) override {
+    const int n = int(from.size());
+    if (to.size() != from.size())
+      throw std::invalid_argument("Collider::contacts: from and to differ in length");
+    Buffer<Vec3> a = to_exec(from), b = to_exec(to);
+    Buffer<int> face(Exec::kSpace, n), side(Exec::kSpace, n);
+    Buffer<Real> tau(Exec::kSpace, n), u(Exec::kSpace, n), v(Exec::kSpace, n);
+    sphfem::cast_contacts(ex_, bvh_, x_old_.data(), x_.data(), n, a.data(), b.data(), tol,
+                          ContactHits{face.data(), tau.data(), u.data(), v.data(), side.data()},
+                          front_only);
+    exec_sync(ex_);
+    const std::vector<int> hf = to_host(face), hs = to_host(side);
+    const std::vector<Real> ht = to_host(tau), hu = to_host(u), hv = to_host(v);
+    std::vector<collide::ContactHit> out(n);
+    for (int i = 0; i < n; ++i)
+      out[i].face = hf[i], out[i].c = collide::Crossing{ht[i], hu[i], hv[i], hs[i]};
+    return out;
+  }
+
   std::vector<int> count_crossings(const std::vector<Vec3>& from,
                                    const std::vector<Vec3>& to) override {
     const int n = int(from.size());

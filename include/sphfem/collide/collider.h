@@ -36,6 +36,11 @@ class Collider {
   virtual std::vector<collide::SegmentHit> cast_moving(const std::vector<Vec3>& p,
                                                        const std::vector<Vec3>& vel, Real dt,
                                                        Real skin) = 0;
+  // The earliest exact contact of each path from[i] -> to[i] with the faces moving from the
+  // last refit's old positions to its new ones (collide::moving_contact).
+  virtual std::vector<collide::ContactHit> contacts(const std::vector<Vec3>& from,
+                                                    const std::vector<Vec3>& to, Real tol,
+                                                    bool front_only = false) = 0;
   virtual std::vector<int> count_crossings(const std::vector<Vec3>& from,
                                            const std::vector<Vec3>& to) = 0;
   virtual std::vector<std::uint8_t> inside(const std::vector<Vec3>& p) = 0;
