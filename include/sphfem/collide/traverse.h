@@ -199,23 +199,31 @@ SPHFEM_HD void descend_path(const BvhView& bv, const Vec3& p, const Vec3& dp, Re
   }
 }
 
-// moving_triangle against each face a path reaches; keeps the earliest hit in the step.
-struct MovingVisit {
+// What the visits of moving faces share: the faces over the step, the particle's path, and
+// face f's old corners and their displacements.
+struct PathQuery {
   const BvhView& bv;
   const Vec3 *x_old, *x_new;
   Vec3 p, dp;
-  Real skin;
   bool front_only;
+  SPHFEM_HD void face(int f, Vec3 x[3], Vec3 d[3]) const {
+    const Tri tr = bv.tris[f];
+    for (int k = 0; k < 3; ++k) x[k] = x_old[tr.v[k]], d[k] = x_new[tr.v[k]] - x[k];
+  }
+};
+
+// moving_triangle against each face a path reaches; keeps the earliest hit in the step.
+struct MovingVisit {
+  PathQuery q;
+  Real skin;
   Real best = Real(FLT_MAX);  // time of the hit, in steps
   SegmentHit h;
   SPHFEM_HD void operator()(int f) {
-    const Tri tr = bv.tris[f];
-    const Vec3 a = x_old[tr.v[0]], b = x_old[tr.v[1]], c = x_old[tr.v[2]];
-    if (front_only && dot(p - a, cross(b - a, c - a)) < Real(0)) return;
+    Vec3 x[3], d[3];
+    q.face(f, x, d);
+    if (q.front_only && dot(q.p - x[0], cross(x[1] - x[0], x[2] - x[0])) < Real(0)) return;
     MovingHit m;
-    if (!moving_triangle(p, dp, skin, a, b, c, x_new[tr.v[0]] - a, x_new[tr.v[1]] - b,
-                         x_new[tr.v[2]] - c, m))
-      return;
+    if (!moving_triangle(q.p, q.dp, skin, x[0], x[1], x[2], d[0], d[1], d[2], m)) return;
     const Real tau = m.t / m.len;
     if (closer(tau, f, best, h.face)) {
       best = tau;
@@ -235,7 +243,8 @@ struct MovingVisit {
 SPHFEM_HD SegmentHit moving_nearest(const BvhView& bv, const Vec3* x_old, const Vec3* x_new,
                                     const Vec3& p, const Vec3& dp, Real skin,
                                     bool front_only = false) {
-  MovingVisit visit{bv, x_old, x_new, p, dp, skin, front_only, Real(FLT_MAX), SegmentHit()};
+  MovingVisit visit{PathQuery{bv, x_old, x_new, p, dp, front_only}, skin, Real(FLT_MAX),
+                    SegmentHit()};
   descend_path(bv, p, dp, skin, visit);
   return visit.h;
 }
@@ -248,20 +257,17 @@ struct ContactHit {
 };
 
 struct ContactVisit {
-  const BvhView& bv;
-  const Vec3 *x_old, *x_new;
-  Vec3 p, dp;
+  PathQuery q;
   Real tol;
-  bool front_only;
   Real best = Real(2);  // beyond the step: nothing found yet
   ContactHit h;
   SPHFEM_HD void operator()(int f) {
-    const Tri tr = bv.tris[f];
-    const Vec3 a = x_old[tr.v[0]], b = x_old[tr.v[1]], c = x_old[tr.v[2]];
+    Vec3 x[3], d[3];
+    q.face(f, x, d);
     Crossing k;
     // A little beyond best, so that ties go to the lower face id (closer) in any visit order.
-    if (!point_face_contact(p, dp, a, b, c, x_new[tr.v[0]] - a, x_new[tr.v[1]] - b,
-                            x_new[tr.v[2]] - c, tol, best * slab_slack(), k, front_only))
+    if (!point_face_contact(q.p, q.dp, x[0], x[1], x[2], d[0], d[1], d[2], tol, best * slab_slack(),
+                            k, q.front_only))
       return;
     if (closer(k.tau, f, best, h.face)) {
       best = k.tau;
@@ -275,7 +281,7 @@ struct ContactVisit {
 SPHFEM_HD ContactHit moving_contact(const BvhView& bv, const Vec3* x_old, const Vec3* x_new,
                                     const Vec3& p, const Vec3& dp, Real tol,
                                     bool front_only = false) {
-  ContactVisit visit{bv, x_old, x_new, p, dp, tol, front_only, Real(2), ContactHit()};
+  ContactVisit visit{PathQuery{bv, x_old, x_new, p, dp, front_only}, tol, Real(2), ContactHit()};
   descend_path(bv, p, dp, tol, visit);
   return visit.h;
 }
