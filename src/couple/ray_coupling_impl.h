@@ -22,7 +22,7 @@ class RayCouplingT final : public RayCoupling {
   RayCouplingT(const RayCouplingSettings& s, BodySolver* bodies, Backend backend)
       : set_(s), bodies_(bodies), coupler_(make_coupler(backend)) {
     const MemSpace sp = Exec::kSpace;
-    for (Buffer<int>* b : {&face_, &tank_face_, &side_}) *b = Buffer<int>(sp);
+    for (Buffer<int>* b : {&face_, &tank_face_}) *b = Buffer<int>(sp);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       *b = Buffer<Real>(sp);
     for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_}) *b = Buffer<Real>(sp);
@@ -142,7 +142,7 @@ class RayCouplingT final : public RayCoupling {
       // Front faces only: a particle inside a body (an inverted element) is let out.
       cast_moving(ex_, body_bvh_, x_old_.data(), a.x, n, f.x, f.v, rdt, skin,
                   SegmentHits{face_.data(), t_.data(), u_.data(), v_.data(), len_.data(), nullptr},
-                  0, false, true);
+                  /*face_offset=*/0, /*merge=*/false, /*front_only=*/true);
     } else {
       fill_no_hit(n);
     }
@@ -255,7 +255,7 @@ class RayCouplingT final : public RayCoupling {
   }
 
   void grow(int n) {
-    for (Buffer<int>* b : {&face_, &tank_face_, &side_}) grow_buffer(*b, n);
+    for (Buffer<int>* b : {&face_, &tank_face_}) grow_buffer(*b, n);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       grow_buffer(*b, n);
     for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_}) grow_buffer(*b, n);
@@ -373,12 +373,12 @@ class RayCouplingT final : public RayCoupling {
     const BodyArrays a = bodies_->arrays();
     int* face = tank_face_.data();  // the coupler is done with the tank's hit buffers
     Real *tau = tank_t_.data(), *hu = tank_u_.data(), *hv = tank_v_.data();
-    int* side = side_.data();
     long crossed = 0;
     for (int pass = 0; pass < kPasses; ++pass) {
       const auto t0 = Clock::now();
+      // Front contacts only (entries), so the fix always puts the particle in front.
       cast_contacts(ex_, body_bvh_, x_old_.data(), a.x, n, pre, x, tol,
-                    ContactHits{face, tau, hu, hv, side}, true);
+                    ContactHits{face, tau, hu, hv, nullptr}, /*front_only=*/true);
       const double c = reduce_sum(
           ex_, n, [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; });
       crossed = long(c + 0.5);
@@ -392,7 +392,7 @@ class RayCouplingT final : public RayCoupling {
         const Tri tr = tris[face[i]];
         const Vec3 p0 = nx[tr.v[0]], p1 = nx[tr.v[1]], p2 = nx[tr.v[2]];
         const Vec3 c = p0 * (Real(1) - hu[i] - hv[i]) + p1 * hu[i] + p2 * hv[i];
-        x[i] = c + couple::face_normal(p0, p1, p2) * (Real(side[i]) * skin);
+        x[i] = c + couple::face_normal(p0, p1, p2) * skin;
       });
       exec_sync(ex_);
       stats_.corrected += crossed;
@@ -409,7 +409,7 @@ class RayCouplingT final : public RayCoupling {
   int body_tris_ = 0, tank_tris_ = 0;
   Buffer<Vec3> x_old_, tank_x_, x_pre_, rel_;
   Buffer<Tri> tank_tri_;
-  Buffer<int> face_, tank_face_, side_;
+  Buffer<int> face_, tank_face_;
   Buffer<Real> t_, u_, v_, len_, tank_t_, tank_u_, tank_v_, tank_len_;
   // Near-surface density: each particle's closest body face this step.
   Buffer<int> near_face_;
