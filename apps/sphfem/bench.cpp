@@ -8,6 +8,7 @@
 #include <string>
 
 #include "sphfem/io/atomic_file.h"
+#include "sphfem/scene/compile.h"
 #include "sphfem/sph/solver.h"
 
 std::string cpu_model() {
@@ -65,19 +66,20 @@ int run_bench(const BenchOptions& opt) {
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
         opt.steps;
-    const Profile& p = solver->profile();
+    const StepProfile& p = solver->profile();
     std::printf("\n%s: %d particles, %zu wall samples, dt 1 ms, %d steps after 20 warm-up\n", name,
                 solver->count(), model.boundary_x.size(), opt.steps);
     std::string phases;
-    for (int k = 0; k < int(Phase::Count); ++k) {
+    for (int k = 0; k < int(Stage::Count); ++k) {
       const double v = p.ms[k] / p.steps;
-      if (v > 0) std::printf("  %-12s %8.2f ms/step\n", phase_name(Phase(k)), v);
+      if (v > 0) std::printf("  %-12s %8.2f ms/step\n", stage_name(Stage(k)), v);
       std::snprintf(line, sizeof line, ",%.3f", v);
       phases += line;
     }
     const double mps = solver->count() / (ms * 1e-3) / 1e6;
     std::printf("  %-12s %8.2f ms/step  (%.2f M particle-steps/s", "total", ms, mps);
-    if (kind == SolverKind::DFSPH) std::printf(", %.1f pressure iterations/step", double(iters) / opt.steps);
+    if (kind == SolverKind::DFSPH)
+      std::printf(", %.1f pressure iterations/step", double(iters) / opt.steps);
     std::printf(")\n");
     std::snprintf(line, sizeof line, "%s,\"%s\",%d,%s,%s,%d,%d%s,%.3f,%.3f,%.2f\n", date,
                   device.c_str(), cpu_threads(), opt.backend.c_str(), name, solver->count(),
@@ -87,13 +89,17 @@ int run_bench(const BenchOptions& opt) {
   if (!opt.out_dir.empty()) {
     io::ensure_directory(opt.out_dir);
     const std::string path = opt.out_dir + "/sph_dam_break.csv";
+    std::string header = "date,device,threads,backend,solver,particles,steps";
+    for (int k = 0; k < int(Stage::Count); ++k) header += ",ms_" + std::string(stage_name(Stage(k)));
+    header += ",ms_step,mparticle_steps_per_s,pressure_iterations";
+    std::string first;
+    if (std::ifstream old(path); old) std::getline(old, first);
+    // Rows of another column set (an older stage list) are kept in a file of their own.
+    if (!first.empty() && first != header)
+      std::filesystem::rename(path, opt.out_dir + "/sph_dam_break_" + date + "_before.csv");
     const bool fresh = !std::filesystem::exists(path);
     std::ofstream f(path, std::ios::app);
-    if (fresh) {
-      f << "date,device,threads,backend,solver,particles,steps";
-      for (int k = 0; k < int(Phase::Count); ++k) f << ",ms_" << phase_name(Phase(k));
-      f << ",ms_step,mparticle_steps_per_s,pressure_iterations\n";
-    }
+    if (fresh) f << header << "\n";
     f << csv;
     std::printf("\nresults appended to %s\n", path.c_str());
   }

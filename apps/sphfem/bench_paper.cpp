@@ -86,8 +86,7 @@ Measured measure(const SceneSpec& scene, Backend backend, int steps) {
   while (sim.time() < 0.3 && !touched()) sim.step(scene.simulation.dt_max);
   const double landed = sim.time() + 0.02;
   while (sim.time() < landed) sim.step(scene.simulation.dt_max);
-  f->reset_profile();
-  if (sim.bodies()) sim.bodies()->reset_profile();
+  sim.reset_profile();
   if (hook) hook->reset_stats();
   const auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < steps; ++i) sim.step(scene.simulation.dt_max);
@@ -95,25 +94,19 @@ Measured measure(const SceneSpec& scene, Backend backend, int steps) {
   m.total =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
       steps;
-  const Profile& p = f->profile();
-  double in_hook = 0;
-  for (int k = 0; k < int(Phase::Count); ++k) {
-    if (Phase(k) == Phase::Coupling)
-      in_hook = p.ms[k];
-    else
-      m.sph += p.ms[k];
-  }
-  m.sph /= steps;
+  const StepProfile& p = sim.profile();
+  auto ms = [&](Stage st) { return p.ms[int(st)] / steps; };
+  m.fem = ms(Stage::Fem);
+  m.coupling = ms(Stage::Proximity) + ms(Stage::Collide) + ms(Stage::ContactFix) +
+               ms(Stage::Exchange);
+  m.sph = ms(Stage::Neighbors) + ms(Stage::Density) + ms(Stage::Divergence) +
+          ms(Stage::Forces) + ms(Stage::Pressure) + ms(Stage::Drift) + ms(Stage::Emit);
   if (hook) {
     const RayCouplingStats& s = hook->stats();
-    m.fem = s.ms_fem / steps;
     m.leak_check = s.ms_leak_check / steps;
-    m.coupling = std::max(0.0, in_hook / steps - m.fem - m.leak_check);
+    m.coupling = std::max(0.0, m.coupling - m.leak_check);
     m.crossed = s.crossed;
     m.contacts = double(s.contacts) / steps;
-  } else if (sim.bodies()) {
-    m.fem = sim.bodies()->profile().ms_total() / steps;
-    m.coupling = in_hook / steps;
   }
   m.total -= m.leak_check;  // a measurement, not part of the method
   m.particles = f->count();

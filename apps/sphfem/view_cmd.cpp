@@ -106,8 +106,8 @@ class LiveScene {
     f.box_lo = scene_.domain.lo;
     f.box_hi = scene_.domain.hi;
     f.particles.clear();
-    if (FluidSolver* fluid = sim_->fluid()) {
-      fluid->snapshot(snap_);
+    if (sim_->fluid()) {
+      sim_->snapshot(snap_);
       f.particles.resize(3 * std::size_t(snap_.n));
       for (int i = 0; i < snap_.n; ++i)
         for (int c = 0; c < 3; ++c) f.particles[3 * std::size_t(i) + c] = float(snap_.x[i][c]);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/node_sums.h"
 #include "couple/stages.h"
 #include "sphfem/core/memory.h"
 #include "sphfem/couple/coupler.h"
@@ -90,6 +91,20 @@ class CouplerT final : public Coupler {
 
     grow(runs_, runs);
     couple::exchange(ex_, S, h, p, keys_.data(), vals_.data(), first_.data(), runs, runs_.data());
+    // +J into each set's nodes, node by node in run order.
+    const couple::RunResult* res = runs_.data();
+    for (int set = 0; set < S.count; ++set) {
+      if (!S.set[set].impulse) continue;
+      node_sums_.add(
+          ex_, 3 * runs, surfaces[std::size_t(set)].nodes,
+          [=] SPHFEM_LAMBDA(int k, int& node, Vec3& value) {
+            const couple::RunResult& r = res[k / 3];
+            if (r.set != set) return;
+            node = r.node[k % 3];
+            value = r.node_impulse[k % 3];
+          },
+          S.set[set].impulse);
+    }
     exec_sync(ex_);
 
     host_runs_.resize(std::size_t(runs));
@@ -212,6 +227,7 @@ class CouplerT final : public Coupler {
   }
 
   Exec ex_;
+  NodeSums<Exec> node_sums_;
   Buffer<std::uint32_t> flag_, keys_, vals_, first_;
   Buffer<couple::RunResult> runs_;
   Buffer<Real> travel_;

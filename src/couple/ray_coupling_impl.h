@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "core/node_sums.h"
 #include "sphfem/collide/bvh.h"
-#include "sphfem/core/atomic.h"
 #include "sphfem/core/memory.h"
 #include "sphfem/couple/coupler.h"
 #include "sphfem/couple/ray_coupling.h"
@@ -44,11 +44,17 @@ class RayCouplingT final : public RayCoupling {
     stats_.body_impulse.assign(s.body.size(), Vec3d());
   }
 
+  void bodies_moved() override {
+    if (body_tris_ == 0) return;
+    const BodyArrays a = bodies_->arrays();
+    body_bvh_.rebuild(ex_, a.x);
+    body_bvh_.refit(ex_, a.x, a.x);
+    exec_sync(ex_);
+  }
+
   const RayCouplingStats& stats() const override { return stats_; }
   void reset_stats() override {
-    const BodyStepInfo last = stats_.last_body_step;
     stats_ = RayCouplingStats();
-    stats_.last_body_step = last;
     stats_.body_impulse.assign(set_.body.size(), Vec3d());
   }
 
@@ -69,8 +75,8 @@ class RayCouplingT final : public RayCoupling {
 
   SurfaceProximity proximity(const FluidArrays& f) override {
     SurfaceProximity p;
+    near_n_active_ = 0;
     if (!set_.near_surface || body_tris_ == 0 || f.n == 0) return p;
-    const auto t0 = Clock::now();
     const int n = f.n;
     grow(n);
     // No refit: the build, and each step's refit over x_old -> x, already bound the bodies
@@ -106,13 +112,8 @@ class RayCouplingT final : public RayCoupling {
       }
       vel[i] = nv[t.v[0]] * w0 + nv[t.v[1]] * u[i] + nv[t.v[2]] * v[i];
     });
-    stats_.near_surface +=
-        long(reduce_sum(ex_, n,
-                        [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; }) +
-             0.5);
     exec_sync(ex_);
-    stats_.ms_collide += ms_since(t0);
-    near_active_ = true;
+    near_n_active_ = n;
     p.dist = dist;
     p.normal = nrm;
     p.velocity = vel;
@@ -120,18 +121,19 @@ class RayCouplingT final : public RayCoupling {
     return p;
   }
 
-  DriftLimits before_drift(const FluidArrays& f, double dt) override {
+  void before_bodies(const FluidArrays& f) override {
     ++stats_.steps;
-    auto t0 = Clock::now();
-    if (near_active_) return_surface_pressure(f);
-    if (bodies_) {
-      collect_body_impulse();
-      step_bodies(dt);
-    }
-    stats_.ms_fem += ms_since(t0);
-    if (!set_.rays) return baseline_before_drift(f);
+    if (near_n_active_ > 0) return_surface_pressure(f);
+    near_n_active_ = 0;
+    if (!bodies_) return;
+    collect_body_impulse();
+    const BodyArrays a = bodies_->arrays();
+    if (body_tris_ > 0) copy(x_old_.data(), a.x, a.nodes);
+    exec_sync(ex_);
+  }
 
-    t0 = Clock::now();
+  DriftLimits cast(const FluidArrays& f, double dt) override {
+    if (!set_.rays) return baseline_cast(f);
     const int n = f.n;
     grow(n);
     const Real rdt = Real(dt);
@@ -152,46 +154,36 @@ class RayCouplingT final : public RayCoupling {
                               tank_len_.data(), nullptr});
       merge_tank_hits(n);
     }
-    exec_sync(ex_);
-    stats_.ms_collide += ms_since(t0);
-
-    t0 = Clock::now();
     surfaces_ = surfaces();
     const DriftLimits d = coupler_->travel(hits(), f, surfaces_, skin, dt);
     // The positions before the drift, for the leak check after it.
     if (body_tris_ > 0) copy(x_pre_.data(), f.x, n);
     exec_sync(ex_);
-    stats_.ms_couple += ms_since(t0);
     return d;
   }
 
-  void after_drift(const FluidArrays& f, double dt) override {
-    if (!set_.rays) {
-      if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, 1);
-      return;
-    }
-    auto t0 = Clock::now();
-    coupler_->push_out(hits(), f, surfaces_, set_.skin);
-    stats_.ms_couple += ms_since(t0);
-    if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, 4);
-    t0 = Clock::now();
+  void fix_contacts(const FluidArrays& f) override {
+    if (set_.rays) coupler_->push_out(hits(), f, surfaces_, set_.skin);
+    // The baseline only counts.
+    if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, set_.rays ? 4 : 1);
+  }
+
+  void exchange(const FluidArrays& f) override {
+    if (!set_.rays) return;
     // The impulse lands in the nodes' array; collect_body_impulse counts it per body.
     const CoupleStats cs = coupler_->apply(hits(), f, surfaces_);
     stats_.contacts += cs.contacts;
-    stats_.ms_couple += ms_since(t0);
   }
 
   // Public only because nvcc does not allow device lambdas in private member functions.
 
   // Baseline: no ray and no drift limit; the bodies' BVH follows them for the leak check.
-  DriftLimits baseline_before_drift(const FluidArrays& f) {
+  DriftLimits baseline_cast(const FluidArrays& f) {
     if (body_tris_ == 0) return DriftLimits();
-    const auto t0 = Clock::now();
     grow(f.n);
     refit_bodies();
     copy(x_pre_.data(), f.x, f.n);
     exec_sync(ex_);
-    stats_.ms_leak_check += ms_since(t0);
     return DriftLimits();
   }
 
@@ -206,26 +198,30 @@ class RayCouplingT final : public RayCoupling {
   }
 
   // The near-surface pressure the fluid felt this step (SurfaceProximity::dv), returned to the
-  // closest face's nodes by the barycentric weights of the closest point.
+  // closest face's nodes by the barycentric weights of the closest point, summed node by node
+  // in particle order (core/node_sums.h).
   void return_surface_pressure(const FluidArrays& f) {
-    near_active_ = false;
     const BodyArrays a = bodies_->arrays();
     const int* face = near_face_.data();
     const Real *u = near_u_.data(), *v = near_v_.data();
     const Vec3* dv = near_dv_.data();
     const Tri* tris = a.surface;
-    Vec3* J = a.impulse;
     const Real m = f.mass;
-    parallel_for(ex_, f.n, [=] SPHFEM_LAMBDA(int i) {
-      if (face[i] < 0) return;
-      const Vec3 j = dv[i] * (-m);
-      if (j.x == Real(0) && j.y == Real(0) && j.z == Real(0)) return;
-      const Tri t = tris[face[i]];
-      atomic_add(&J[t.v[0]], j * (Real(1) - u[i] - v[i]));
-      atomic_add(&J[t.v[1]], j * u[i]);
-      atomic_add(&J[t.v[2]], j * v[i]);
-    });
-    exec_sync(ex_);
+    stats_.near_surface += long(
+        reduce_sum(ex_, f.n, [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; }) +
+        0.5);
+    node_sums_.add(
+        ex_, 3 * f.n, a.nodes,
+        [=] SPHFEM_LAMBDA(int k, int& node, Vec3& value) {
+          const int i = k / 3, c = k % 3;
+          if (face[i] < 0) return;
+          const Vec3 d = dv[i];
+          if (d.x == Real(0) && d.y == Real(0) && d.z == Real(0)) return;
+          const Real w = c == 0 ? Real(1) - u[i] - v[i] : c == 1 ? u[i] : v[i];
+          node = tris[face[i]].v[c];
+          value = d * (-m * w);
+        },
+        a.impulse);
   }
 
   // What the fluid gave each body since its last step (rays, samples and near-surface
@@ -265,20 +261,6 @@ class RayCouplingT final : public RayCoupling {
 
   void copy(Vec3* dst, const Vec3* src, int n) {
     parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) { dst[i] = src[i]; });
-  }
-
-  void step_bodies(double dt) {
-    const BodyArrays a = bodies_->arrays();
-    if (body_tris_ > 0) {
-      copy(x_old_.data(), a.x, a.nodes);
-      exec_sync(ex_);
-    }
-    BodyStepInfo info;
-    try {
-      info = bodies_->step(dt);
-    } catch (const std::runtime_error& e) { throw BodyStepError(e.what()); }
-    if (!std::isfinite(info.cg_residual)) throw BodyStepError("the body solve became non-finite");
-    stats_.last_body_step = info;
   }
 
   // The tank's inner faces as a static mesh: 8 corners, 2 triangles a face (no lid when the
@@ -382,9 +364,8 @@ class RayCouplingT final : public RayCoupling {
       const double c = reduce_sum(
           ex_, n, [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; });
       crossed = long(c + 0.5);
-      (pass == 0 ? stats_.ms_leak_check : stats_.ms_couple) += ms_since(t0);
+      if (pass == 0) stats_.ms_leak_check += ms_since(t0);
       if (crossed == 0 || pass == kPasses - 1) break;
-      const auto t1 = Clock::now();
       const Vec3* nx = a.x;
       const Tri* tris = a.surface;
       parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) {
@@ -396,7 +377,6 @@ class RayCouplingT final : public RayCoupling {
       });
       exec_sync(ex_);
       stats_.corrected += crossed;
-      stats_.ms_couple += ms_since(t1);
     }
     return crossed;
   }
@@ -415,7 +395,8 @@ class RayCouplingT final : public RayCoupling {
   Buffer<int> near_face_;
   Buffer<Real> near_dist_, near_u_, near_v_;
   Buffer<Vec3> near_n_, near_vel_, near_dv_;
-  bool near_active_ = false;
+  int near_n_active_ = 0;  // particles proximity() found surfaces for, this step
+  NodeSums<Exec> node_sums_;
   std::vector<CoupleSurface> surfaces_;
   RayCouplingStats stats_;
 };

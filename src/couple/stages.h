@@ -7,7 +7,6 @@
 
 #include <cstdint>
 
-#include "sphfem/core/atomic.h"
 #include "sphfem/couple/impulse.h"
 #include "sphfem/fem/mesh.h"
 
@@ -192,11 +191,16 @@ struct RunResult {
   int body = 0;
   int new_face = 0;   // first run of its face (the other side may follow)
   int exchanged = 0;  // approaching: an impulse was exchanged
+  // What the face's nodes receive (set -1: nothing), summed into them afterwards in a fixed
+  // order (core/node_sums.h) rather than by atomics: a node is shared by several faces.
+  int set = -1;
+  int node[3] = {0, 0, 0};
+  Vec3 node_impulse[3];
 };
 
 // One thread per (face, side): the particles there as one lump (mass-weighted velocity and
 // hit weights), the face impulse J (impulse.h); -J to the particles by mass share (each has
-// one hit, so plain writes), +J to the nodes by the lump's weights (atomic: shared nodes).
+// one hit, so plain writes); +J by the lump's weights is recorded for the face's nodes.
 template <class Exec>
 void exchange(Exec& ex, const SurfacesView S, const HitView h, const ParticleView p,
               const std::uint32_t* keys, const std::uint32_t* vals, const std::uint32_t* first,
@@ -230,13 +234,18 @@ void exchange(Exec& ex, const SurfacesView S, const HitView h, const ParticleVie
     res.body = body;
     res.new_face = r == 0 || (keys[first[r - 1]] >> 1) != key >> 1 ? 1 : 0;
     res.exchanged = J.x != Real(0) || J.y != Real(0) || J.z != Real(0) ? 1 : 0;
+    if (res.exchanged) {
+      const Vec3 dv = J * inv_mp;
+      for (std::uint32_t k = b; k < e; ++k) p.v[vals[k]] -= dv;
+      if (S.set[fn.set].impulse) {
+        res.set = fn.set;
+        for (int c = 0; c < 3; ++c) {
+          res.node[c] = fn.node[c];
+          res.node_impulse[c] = J * wm[c];
+        }
+      }
+    }
     out[r] = res;
-    if (!res.exchanged) return;
-    const Vec3 dv = J * inv_mp;
-    for (std::uint32_t k = b; k < e; ++k) p.v[vals[k]] -= dv;
-    Vec3* impulse = S.set[fn.set].impulse;
-    if (impulse)
-      for (int c = 0; c < 3; ++c) atomic_add(&impulse[fn.node[c]], J * wm[c]);
   });
 }
 

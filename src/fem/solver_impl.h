@@ -160,6 +160,43 @@ class BodySolverT final : public BodySolver {
     b_.download(f.data(), n_);
   }
 
+  void save(BodyState& s) const override {
+    s.nodes = n_;
+    s.elements = ne_;
+    s.time = t_;
+    s.steps = steps_;
+    s.warm = warm_;
+    for (std::vector<Vec3>* a : {&s.x, &s.v, &s.dv, &s.impulse}) a->resize(n_);
+    s.rotation.resize(ne_);
+    x_.download(s.x.data(), n_);
+    v_.download(s.v.data(), n_);
+    dv_.download(s.dv.data(), n_);
+    impulse_.download(s.impulse.data(), n_);
+    rot_.download(s.rotation.data(), ne_);
+  }
+
+  void load(const BodyState& s) override {
+    const std::size_t n = std::size_t(n_), ne = std::size_t(ne_);
+    if (s.nodes != n_ || s.elements != ne_ || s.x.size() != n || s.v.size() != n ||
+        s.dv.size() != n || s.impulse.size() != n || s.rotation.size() != ne)
+      throw std::invalid_argument("body state: " + std::to_string(s.nodes) + " nodes and " +
+                                  std::to_string(s.elements) + " elements, the model has " +
+                                  std::to_string(n_) + " and " + std::to_string(ne_));
+    t_ = s.time;
+    steps_ = s.steps;
+    warm_ = s.warm;
+    x_.upload(s.x.data(), n);
+    v_.upload(s.v.data(), n);
+    dv_.upload(s.dv.data(), n);
+    impulse_.upload(s.impulse.data(), n);
+    rot_.upload(s.rotation.data(), ne);
+    // Waiting impulses go into the next step, as they would have.
+    has_impulses_ = false;
+    for (const Vec3& j : s.impulse)
+      if (j.x != Real(0) || j.y != Real(0) || j.z != Real(0)) has_impulses_ = true;
+    exec_sync(ex_);
+  }
+
   BodyArrays arrays() override {
     BodyArrays a;
     a.space = Exec::kSpace;

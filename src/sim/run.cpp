@@ -81,9 +81,8 @@ std::vector<std::string> gauge_columns(const SceneSpec& scene) {
                                 "momentum_total_x",
                                 "momentum_total_y",
                                 "momentum_total_z"};
-  for (int p = 0; p < int(Phase::Count); ++p)
-    c.push_back(std::string("ms_") + phase_name(Phase(p)));
-  c.push_back("ms_fem");
+  for (int k = 0; k < int(Stage::Count); ++k)
+    c.push_back(std::string("ms_") + stage_name(Stage(k)));
   c.push_back("ms_leak_check");
   c.push_back("ms_step");
   for (const GaugeSpec& g : scene.gauges) {
@@ -258,7 +257,7 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
     // Bodies first: a blown-up body stops the run before any part of this frame is written.
     BodyMetrics bm;
     if (fem) body_metrics(bm);
-    if (solver) solver->snapshot(snap);
+    if (solver) sim.snapshot(snap);
     const FrameMetrics m = compute_metrics(snap, model, scene.gauges, scene.domain);
     // Leaks: particles inside a body now, and those that crossed a surface since the last frame.
     const long inside = solver && fem ? sim.count_inside(snap.x, body_snap.x) : 0;
@@ -286,7 +285,7 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
       io::write_vtu(frames_dir + "/" + name, body_frames->tets(body_snap));
       tets_pvd->add(t, std::string("frames/") + name);
     }
-    const Profile prof = solver ? solver->profile() : Profile();
+    const StepProfile& prof = sim.profile();
     const BodyProfile fprof = fem ? fem->profile() : BodyProfile();
     const double per = prof.steps ? 1.0 / double(prof.steps) : 0.0;
     const double fper = fprof.steps ? 1.0 / double(fprof.steps) : 0.0;
@@ -312,20 +311,9 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
                                p_total.x,
                                p_total.y,
                                p_total.z};
-    // The hook's time inside the fluid step holds the bodies' step and the leak check; they
-    // get their own columns, so ms_coupling is the collision detection and response alone.
-    const double hook_aside = hs.ms_fem + hs.ms_leak_check;
-    double total = 0;
-    for (int p = 0; p < int(Phase::Count); ++p) {
-      double ms = prof.ms[p];
-      if (Phase(p) == Phase::Coupling) ms = std::max(0.0, ms - hook_aside);
-      row.push_back(ms * per);
-      total += ms * per;
-    }
-    row.push_back(fprof.ms_total() * fper);
-    total += fprof.ms_total() * fper;
+    for (int k = 0; k < int(Stage::Count); ++k) row.push_back(prof.ms[k] * per);
     row.push_back(hs.ms_leak_check * per);
-    row.push_back(total);
+    row.push_back(prof.total() * per);
     std::size_t probe = 0, followed = 0;
     for (const GaugeSpec& g : scene.gauges) {
       if (g.kind != GaugeKind::Node) {
@@ -346,8 +334,7 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
     if (hook) hook->reset_stats();
     t_frame = t;
     gauges.row(row);
-    if (solver) solver->reset_profile();
-    if (fem) fem->reset_profile();
+    sim.reset_profile();
     steps_since = piter = diter = 0;
     ++sum.frames;
   };

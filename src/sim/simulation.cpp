@@ -1,29 +1,14 @@
 // The solvers of a scene wired together (include/sphfem/sim/simulation.h).
 #include "sphfem/sim/simulation.h"
 
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
 #include "sphfem/scene/bodies.h"
+#include "sphfem/scene/compile.h"
 
 namespace sphfem {
-
-RayCouplingSettings ray_coupling_settings(const SceneSpec& scene) {
-  RayCouplingSettings cs;
-  cs.rays = scene.coupling.method == CouplingMethod::RayTraced;
-  // The baseline's samples stand for the bodies; the tank keeps its own samples.
-  cs.near_surface = cs.rays && scene.coupling.near_surface_density;
-  cs.skin = Real(scene.coupling.skin * scene.fluid.particle_radius);
-  cs.tank = cs.rays && scene.coupling.tank_rays;
-  cs.tank_lo = Vec3(scene.domain.lo);
-  cs.tank_hi = Vec3(scene.domain.hi);
-  cs.open_top = scene.domain.open_top;
-  cs.wall = ContactCoeffs{Real(scene.coupling.wall_restitution), Real(scene.coupling.wall_slip)};
-  for (const BodySpec& b : scene.bodies)
-    cs.body.push_back(ContactCoeffs{Real(b.restitution), Real(b.slip)});
-  cs.rebuild_quality = scene.coupling.rebuild_quality;
-  return cs;
-}
 
 Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) {
   if (!scene.has_fluid() && scene.bodies.empty())
@@ -37,15 +22,14 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
     bodies_model_ = compile_scene_bodies(scene);
     bodies_ = make_body_solver(bodies_model_, backend);
   }
-  // With fluid, the bodies step inside the fluid step (the hook), for either coupling; the
-  // tank's faces can join the ray cast even in a scene without bodies.
+  // The coupling's stages run whenever fluid meets a surface: bodies (either coupling), or
+  // the tank's faces in the ray cast even in a scene without bodies.
   const bool rays = scene.coupling.method == CouplingMethod::RayTraced;
   if (fluid_ && (bodies_ || (rays && scene.coupling.tank_rays))) {
     RayCouplingSettings cs = ray_coupling_settings(scene);
     cs.near_surface = cs.near_surface && bodies_ != nullptr;
     cs.support = fluid_model_.params.h;
-    hook_ = make_ray_coupling(cs, bodies_.get(), backend);
-    fluid_->set_hook(hook_.get());
+    coupling_ = make_ray_coupling(cs, bodies_.get(), backend);
     // The baseline: samples a particle spacing apart on every body surface (Akinci et al.).
     if (!rays && bodies_)
       fluid_->set_moving_samples(sample_surface(bodies_model_.x0, bodies_model_.surface,
@@ -57,30 +41,103 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
 
 double Simulation::time() const { return fluid_ ? fluid_->time() : t_bodies_; }
 
+long Simulation::steps() const {
+  return fluid_ ? fluid_->steps() : bodies_ ? bodies_->steps() : 0;
+}
+
+template <class F>
+void Simulation::timed(Stage s, F&& fn) {
+  const auto t0 = std::chrono::steady_clock::now();
+  fn();
+  profile_.ms[int(s)] +=
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// One step (paper §3-4 with the corrections of docs/design.md), stage by stage. The fluid
+// keeps its particle order from sort() to the end of the step; every stage finishes its work
+// before the next begins.
 StepInfo Simulation::step(double dt_limit) {
   StepInfo info;
-  if (fluid_) {
-    info = fluid_->step(dt_limit);
-  } else {
+  ++profile_.steps;
+  if (!fluid_) {  // bodies alone, in steps of dt_limit
     info.dt = dt_limit;
+    timed(Stage::Fem, [&] { step_bodies(dt_limit); });
+    t_bodies_ += dt_limit;
+    return info;
   }
-  if (bodies_ && !bodies_in_fluid_step()) {
-    BodyStepInfo b;
-    try {
-      b = bodies_->step(info.dt);
-    } catch (const std::runtime_error& e) {
-      throw BodyStepError(e.what());  // the solver's own check: a non-finite right-hand side
-    }
-    if (!std::isfinite(b.cg_residual)) throw BodyStepError("the body solve became non-finite");
+  FluidSolver& f = *fluid_;
+  RayCoupling* c = coupling_.get();
+  timed(Stage::Neighbors, [&] { f.sort(c ? c->moving_boundary(f.arrays()) : MovingSurface()); });
+  SurfaceProximity near;
+  if (c) timed(Stage::Proximity, [&] { near = c->proximity(f.arrays()); });
+  timed(Stage::Density, [&] { f.density(near); });
+  const double dt = f.time_step(dt_limit, info);
+  timed(Stage::Divergence, [&] { f.divergence(info); });
+  timed(Stage::Forces, [&] { f.forces(info); });
+  timed(Stage::Pressure, [&] {
+    f.pressure(info);
+    if (c) c->before_bodies(f.arrays());
+  });
+  if (bodies_) timed(Stage::Fem, [&] { step_bodies(dt); });
+  DriftLimits limits;
+  if (c) timed(Stage::Collide, [&] { limits = c->cast(f.arrays(), dt); });
+  timed(Stage::Drift, [&] { f.drift(limits, info); });
+  if (c) {
+    timed(Stage::ContactFix, [&] { c->fix_contacts(f.arrays()); });
+    timed(Stage::Exchange, [&] { c->exchange(f.arrays()); });
   }
-  if (!fluid_) t_bodies_ += info.dt;
+  timed(Stage::Emit, [&] { f.emit(info); });
   return info;
+}
+
+void Simulation::step_bodies(double dt) {
+  BodyStepInfo b;
+  try {
+    b = bodies_->step(dt);
+  } catch (const std::runtime_error& e) {
+    throw BodyStepError(e.what());  // the solver's own check: a non-finite right-hand side
+  }
+  if (!std::isfinite(b.cg_residual)) throw BodyStepError("the body solve became non-finite");
+}
+
+void Simulation::reset_profile() {
+  profile_.clear();
+  if (fluid_) fluid_->reset_profile();
+  if (bodies_) bodies_->reset_profile();
+}
+
+void Simulation::snapshot(FluidSnapshot& out) {
+  if (!fluid_) {
+    out = FluidSnapshot();
+    return;
+  }
+  fluid_->snapshot(out, coupling_.get());
+}
+
+void Simulation::save(SimState& s) const {
+  s = SimState();
+  s.time = t_bodies_;
+  s.has_fluid = fluid_ != nullptr;
+  s.has_bodies = bodies_ != nullptr;
+  if (fluid_) fluid_->save(s.fluid);
+  if (bodies_) bodies_->save(s.bodies);
+}
+
+void Simulation::load(const SimState& s) {
+  if (s.has_fluid != (fluid_ != nullptr) || s.has_bodies != (bodies_ != nullptr))
+    throw std::invalid_argument(std::string("state: ") + (s.has_fluid ? "with" : "without") +
+                                " fluid and " + (s.has_bodies ? "with" : "without") +
+                                " bodies, the scene is otherwise");
+  if (fluid_) fluid_->load(s.fluid);
+  if (bodies_) bodies_->load(s.bodies);
+  t_bodies_ = s.time;
+  if (coupling_) coupling_->bodies_moved();
 }
 
 long Simulation::count_inside() {
   if (!inside_check_) return 0;
   FluidSnapshot f;
-  fluid_->snapshot(f);
+  snapshot(f);
   if (f.n == 0) return 0;
   BodySnapshot b;
   bodies_->snapshot(b);

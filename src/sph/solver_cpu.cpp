@@ -6,12 +6,6 @@ namespace sphfem {
 
 std::unique_ptr<FluidSolver> make_cuda_fluid_solver(const FluidModel& model);
 
-const char* phase_name(Phase p) {
-  static const char* names[] = {"neighbors", "density",   "divergence", "forces",
-                                "pressure",  "integrate", "emit",       "coupling"};
-  return names[int(p)];
-}
-
 std::unique_ptr<FluidSolver> make_fluid_solver(const FluidModel& model, Backend backend) {
   if (backend == Backend::Cuda) {
     std::string why;

@@ -67,13 +67,12 @@ class SolverT final : public FluidSolver {
       discs_.back().upload(e.disc.data(), e.disc.size());
       travelled_.push_back(0.0);
     }
-    last_dt_ = m.dt_max;
   }
 
   int count() const override { return n_; }
   double time() const override { return t_; }
   long steps() const override { return steps_; }
-  const Profile& profile() const override { return prof_; }
+  const StepProfile& profile() const override { return prof_; }
   void reset_profile() override { prof_.clear(); }
   const FluidModel& model() const override { return model_; }
   void set_hook(StepHook* hook) override { hook_ = hook; }
@@ -141,109 +140,235 @@ class SolverT final : public FluidSolver {
     mactive_ = 0;
   }
 
+  // A fluid alone: the stages in Simulation::step's order, with the hook around the drift.
   StepInfo step(double dt_limit) override {
     StepInfo info;
-    const bool dfsph = model_.solver == SolverKind::DFSPH;
-    timed(Phase::Neighbors, [&] {
-      place_moving_samples();
-      sort_particles();
+    timed(Stage::Neighbors, [&] {
+      sort(hook_ && msamples_ ? hook_->moving_boundary(arrays()) : MovingSurface());
     });
-    prox_ = SurfaceProximity();
-    if (hook_) timed(Phase::Coupling, [&] { prox_ = hook_->proximity(arrays()); });
-    const GridView g = grid(start_.data());
-    const Walls w = walls();
-    const BoundaryView& b = w.fixed;
-    const BoundaryView& mb = w.moving;
-    FluidView f = view();
-    timed(Phase::Density, [&] {
-      stages::density(ex_, P_, f, g, w, dfsph);
-      if (dfsph) {
-        active_walls_ = stages::wall_density(ex_, P_, f, g, b);
-        if (mb.n) active_walls_ += stages::wall_density(ex_, P_, f, g, mb);
-        stages::dfsph_smooth_warm(ex_, P_, f, g, w, tmpr_.data());
-        warm_dens_.swap(tmpr_);
-        f.warm_dens = warm_dens_.data();
-      }
-    });
-    if (dfsph) p_.zero();
-
-    double dt_free = 0;
-    const double dt = choose_dt(dt_limit, dt_free);
-    const Real rdt = Real(dt);
-    // How much of a full step this one is: the pace of density corrections and the weight of
-    // this step in the warm starts (stages::dfsph_source, stages::dfsph_remember).
-    const Real pace = Real(dt / dt_free);
-    info.dt = dt;
-    Vec3* J = mimp_.data();  // impulse on the moving samples, this step
-    if (dfsph) {
-      timed(Phase::Divergence, [&] {
-        info.divergence_iterations = solve(f, g, w, rdt, pace, true, model_.divergence_tolerance);
-        if (mb.n) stages::sample_pressure_impulse(ex_, P_, f, g, mb, rdt, J);
-      });
-      timed(Phase::Forces, [&] {
-        stages::accelerations(ex_, P_, f, g, w, false, rdt);
-        if (mb.n) stages::sample_force_impulse(ex_, P_, f, g, mb, false, rdt, J);
-      });
-      timed(Phase::Integrate, [&] { stages::kick(ex_, f, rdt); });
-      timed(Phase::Pressure, [&] {
-        info.pressure_iterations = solve(f, g, w, rdt, pace, false, model_.density_tolerance);
-        info.density_error = last_error_;
-        if (mb.n) stages::sample_pressure_impulse(ex_, P_, f, g, mb, rdt, J);
-      });
-    } else {
-      timed(Phase::Forces, [&] {
-        stages::wall_pressure(ex_, P_, f, g, b);
-        if (mb.n) stages::wall_pressure(ex_, P_, f, g, mb);
-        stages::accelerations(ex_, P_, f, g, w, true, rdt);
-        if (mb.n) stages::sample_force_impulse(ex_, P_, f, g, mb, true, rdt, J);
-      });
-      timed(Phase::Integrate, [&] { stages::kick(ex_, f, rdt); });
-    }
-    if (mb.n && moving_.impulse)
-      timed(Phase::Coupling, [&] {
-        stages::node_impulse(ex_, mnodes_, mnode_start_.data(), mnode_sample_.data(),
-                             mnode_w_.data(), mslot_.data(), J, moving_.impulse);
-      });
+    SurfaceProximity near;
+    if (hook_) timed(Stage::Proximity, [&] { near = hook_->proximity(arrays()); });
+    timed(Stage::Density, [&] { density(near); });
+    const double dt = time_step(dt_limit, info);
+    timed(Stage::Divergence, [&] { divergence(info); });
+    timed(Stage::Forces, [&] { forces(info); });
+    timed(Stage::Pressure, [&] { pressure(info); });
     DriftLimits limits;
-    if (hook_) timed(Phase::Coupling, [&] { limits = hook_->before_drift(arrays(), dt); });
-    timed(Phase::Integrate,
-          [&] { info.clamped = stages::drift(ex_, P_, f, rdt, limits.travel, limits.surface_v); });
-    if (hook_) timed(Phase::Coupling, [&] { hook_->after_drift(arrays(), dt); });
-    t_ += dt;
-    ++steps_;
-    last_dt_ = dt;
-    timed(Phase::Emit, [&] { info.emitted = emit(dt); });
+    if (hook_) timed(Stage::Collide, [&] { limits = hook_->before_drift(arrays(), dt); });
+    timed(Stage::Drift, [&] { drift(limits, info); });
+    if (hook_) timed(Stage::Exchange, [&] { hook_->after_drift(arrays(), dt); });
+    timed(Stage::Emit, [&] { emit(info); });
     ++prof_.steps;
     return info;
   }
 
-  void snapshot(FluidSnapshot& out) override {
-    // Densities and neighbour counts of the current positions, not of the last step's start
-    // (the hook's surfaces included).
-    place_moving_samples();
+  void sort(const MovingSurface& moving) override {
+    place_moving_samples(moving);
     sort_particles();
-    prox_ = hook_ ? hook_->proximity(arrays()) : SurfaceProximity();
+    exec_sync(ex_);
+  }
+
+  void density(const SurfaceProximity& near) override {
+    prox_ = near;
+    const bool dfsph = model_.solver == SolverKind::DFSPH;
+    const Walls w = walls();
     FluidView f = view();
-    stages::density(ex_, P_, f, grid(start_.data()), walls(), model_.solver == SolverKind::DFSPH);
+    const GridView g = grid(start_.data());
+    stages::density(ex_, P_, f, g, w, dfsph);
+    if (dfsph) {
+      active_walls_ = stages::wall_density(ex_, P_, f, g, w.fixed);
+      if (w.moving.n) active_walls_ += stages::wall_density(ex_, P_, f, g, w.moving);
+      stages::dfsph_smooth_warm(ex_, P_, f, g, w, tmpr_.data());
+      warm_dens_.swap(tmpr_);
+      p_.zero();
+    }
+    exec_sync(ex_);
+  }
+
+  double time_step(double dt_limit, StepInfo& info) override {
+    double dt_free = 0;
+    dt_ = choose_dt(dt_limit, dt_free);
+    // How much of a full step this one is: the pace of density corrections and the weight of
+    // this step in the warm starts (stages::dfsph_source, stages::dfsph_remember).
+    pace_ = Real(dt_ / dt_free);
+    info.dt = dt_;
+    return dt_;
+  }
+
+  void divergence(StepInfo& info) override {
+    if (model_.solver != SolverKind::DFSPH) return;
+    const Walls w = walls();
+    info.divergence_iterations =
+        solve(view(), grid(start_.data()), w, Real(dt_), pace_, true, model_.divergence_tolerance);
+    if (w.moving.n)
+      stages::sample_pressure_impulse(ex_, P_, view(), grid(start_.data()), w.moving, Real(dt_),
+                                      mimp_.data());
+    exec_sync(ex_);
+  }
+
+  void forces(StepInfo&) override {
+    const bool wcsph = model_.solver == SolverKind::WCSPH;
+    const Walls w = walls();
+    FluidView f = view();
+    const GridView g = grid(start_.data());
+    const Real rdt = Real(dt_);
+    if (wcsph) {
+      stages::wall_pressure(ex_, P_, f, g, w.fixed);
+      if (w.moving.n) stages::wall_pressure(ex_, P_, f, g, w.moving);
+    }
+    stages::accelerations(ex_, P_, f, g, w, wcsph, rdt);
+    if (w.moving.n) stages::sample_force_impulse(ex_, P_, f, g, w.moving, wcsph, rdt, mimp_.data());
+    stages::kick(ex_, f, rdt);
+    exec_sync(ex_);
+  }
+
+  void pressure(StepInfo& info) override {
+    const Walls w = walls();
+    if (model_.solver == SolverKind::DFSPH) {
+      info.pressure_iterations = solve(view(), grid(start_.data()), w, Real(dt_), pace_, false,
+                                       model_.density_tolerance);
+      info.density_error = last_error_;
+      if (w.moving.n)
+        stages::sample_pressure_impulse(ex_, P_, view(), grid(start_.data()), w.moving,
+                                        Real(dt_), mimp_.data());
+    }
+    if (w.moving.n && moving_.impulse)
+      stages::node_impulse(ex_, mnodes_, mnode_start_.data(), mnode_sample_.data(),
+                           mnode_w_.data(), mslot_.data(), mimp_.data(), moving_.impulse);
+    exec_sync(ex_);
+  }
+
+  void drift(const DriftLimits& limits, StepInfo& info) override {
+    info.clamped = stages::drift(ex_, P_, view(), Real(dt_), limits.travel, limits.surface_v);
+    exec_sync(ex_);
+    t_ += dt_;
+    ++steps_;
     prox_ = SurfaceProximity();
-    out.n = n_;
-    out.x.resize(n_);
-    out.v.resize(n_);
-    out.rho.resize(n_);
-    out.p.resize(n_);
-    out.id.resize(n_);
-    out.neighbors.resize(n_);
-    x_.download(out.x.data(), n_);
-    v_.download(out.v.data(), n_);
-    rho_.download(out.rho.data(), n_);
-    p_.download(out.p.data(), n_);
-    id_.download(out.id.data(), n_);
-    nb_.download(out.neighbors.data(), n_);
+  }
+
+  void emit(StepInfo& info) override {
+    info.emitted = emit_layers(dt_);
+    exec_sync(ex_);
+  }
+
+  FluidArrays arrays() override {
+    FluidArrays a;
+    a.space = Exec::kSpace;
+    a.n = n_;
+    a.x = x_.data();
+    a.v = v_.data();
+    a.id = id_.data();
+    a.mass = P_.mass;
+    a.radius = P_.spacing / Real(2);
+    return a;
+  }
+
+  // Densities and neighbour counts of the present positions, computed on a cell-sorted copy
+  // (scratch buffers only) and returned in the state's order, which stays as it is.
+  void snapshot(FluidSnapshot& out, SurfaceQuery* surfaces) override {
+    if (!surfaces) surfaces = hook_;
+    const bool dfsph = model_.solver == SolverKind::DFSPH;
+    const int n = n_;
+    const GridView g = grid(start_.data());
+    // perm_[k]: the state index of the k-th particle in cell order.
+    stages::cell_keys(ex_, g, x_.data(), keys_.data(), perm_.data(), n);
+    sort_pairs(ex_, keys_.data(), perm_.data(), n, key_bits());
+    stages::gather(ex_, x_.data(), tmp3_.data(), perm_.data(), n);
+    stages::gather(ex_, v_.data(), a_.data(), perm_.data(), n);
+    stages::cell_starts(ex_, keys_.data(), start_.data(), n, g.cells());
+    FluidView f = view();
+    f.x = tmp3_.data();
+    f.v = a_.data();
+    f.p = tmpr_.data();
+    f.warm_div = f.warm_dens = nullptr;
+    f.gwall = nullptr;
+    FluidArrays sorted = arrays();
+    sorted.x = tmp3_.data();
+    sorted.v = a_.data();
+    sorted.id = nullptr;
+    place_moving_samples(surfaces && msamples_ ? surfaces->moving_boundary(sorted)
+                                               : MovingSurface());
+    prox_ = surfaces ? surfaces->proximity(sorted) : SurfaceProximity();
+    stages::density(ex_, P_, f, g, walls(), /*with_alpha=*/false);
+    prox_ = SurfaceProximity();
+    exec_sync(ex_);
+    std::vector<std::uint32_t> perm(n);
+    std::vector<Real> rho(n), p(n);
+    std::vector<int> nb(n);
+    perm_.download(perm.data(), n);
+    rho_.download(rho.data(), n);
+    nb_.download(nb.data(), n);
+    tmpr_.download(p.data(), n);
+    out.n = n;
+    out.x.resize(n);
+    out.v.resize(n);
+    out.rho.resize(n);
+    out.p.resize(n);
+    out.id.resize(n);
+    out.neighbors.resize(n);
+    x_.download(out.x.data(), n);
+    v_.download(out.v.data(), n);
+    id_.download(out.id.data(), n);
+    // DFSPH: the pressure of the last solve, in the state's order; WCSPH: the equation of state
+    // at the present densities.
+    if (dfsph) p_.download(out.p.data(), n);
+    for (int k = 0; k < n; ++k) {
+      out.rho[perm[k]] = rho[k];
+      out.neighbors[perm[k]] = nb[k];
+      if (!dfsph) out.p[perm[k]] = p[k];
+    }
+  }
+
+  void save(FluidState& s) const override {
+    s.n = n_;
+    s.time = t_;
+    s.steps = steps_;
+    s.next_id = next_id_;
+    s.capacity_warned = capacity_warned_;
+    s.emitter_travel = travelled_;
+    s.x.resize(n_);
+    s.v.resize(n_);
+    s.id.resize(n_);
+    s.warm_div.resize(n_);
+    s.warm_dens.resize(n_);
+    x_.download(s.x.data(), n_);
+    v_.download(s.v.data(), n_);
+    id_.download(s.id.data(), n_);
+    warm_div_.download(s.warm_div.data(), n_);
+    warm_dens_.download(s.warm_dens.data(), n_);
+  }
+
+  void load(const FluidState& s) override {
+    const std::size_t n = std::size_t(s.n);
+    if (s.n < 0 || s.n > cap_)
+      throw std::invalid_argument("fluid state: " + std::to_string(s.n) +
+                                  " particles, the model holds at most " + std::to_string(cap_));
+    if (s.x.size() != n || s.v.size() != n || s.id.size() != n || s.warm_div.size() != n ||
+        s.warm_dens.size() != n)
+      throw std::invalid_argument("fluid state: arrays of another length than its " +
+                                  std::to_string(s.n) + " particles");
+    if (s.emitter_travel.size() != travelled_.size())
+      throw std::invalid_argument("fluid state: " + std::to_string(s.emitter_travel.size()) +
+                                  " emitters, the model has " +
+                                  std::to_string(travelled_.size()));
+    n_ = s.n;
+    t_ = s.time;
+    steps_ = s.steps;
+    next_id_ = s.next_id;
+    capacity_warned_ = s.capacity_warned;
+    travelled_ = s.emitter_travel;
+    x_.upload(s.x.data(), n);
+    v_.upload(s.v.data(), n);
+    id_.upload(s.id.data(), n);
+    warm_div_.upload(s.warm_div.data(), n);
+    warm_dens_.upload(s.warm_dens.data(), n);
+    p_.zero();
+    exec_sync(ex_);
   }
 
  private:
   template <class F>
-  void timed(Phase ph, F&& fn) {
+  void timed(Stage ph, F&& fn) {
     const auto t0 = std::chrono::steady_clock::now();
     fn();
     exec_sync(ex_);
@@ -323,20 +448,20 @@ class SolverT final : public FluidSolver {
     return w;
   }
 
-  // Boundary-particle coupling: the samples on the hook's surface as it is now, sorted into
+  // Boundary-particle coupling: the samples on the given surface as it is now, sorted into
   // their own cell grid, with psi and (DFSPH) their walls-alone density; impulses start at 0.
-  void place_moving_samples() {
+  void place_moving_samples(const MovingSurface& surface) {
     mactive_ = 0;
     moving_ = MovingSurface();
-    if (!hook_ || !msamples_) return;
-    moving_ = hook_->moving_boundary(arrays());
+    if (!msamples_) return;
+    moving_ = surface;
     if (moving_.nodes == 0 || !moving_.x || !moving_.tri) return;
     if (moving_.space != Exec::kSpace)
       throw std::runtime_error(
-          "StepHook::moving_boundary: the surface is in another memory space than the fluid "
+          "moving_boundary: the surface is in another memory space than the fluid "
           "solver's; pass the body solver's arrays of the same backend");
     if (moving_.nodes != mnodes_)
-      throw std::runtime_error("StepHook::moving_boundary: the surface has " +
+      throw std::runtime_error("moving_boundary: the surface has " +
                                std::to_string(moving_.nodes) + " nodes, set_moving_samples " +
                                std::to_string(mnodes_));
     const int n = msamples_;
@@ -354,18 +479,6 @@ class SolverT final : public FluidSolver {
     stages::sample_psi(ex_, P_, b, mpsi_.data());
     stages::wall_rest(ex_, P_, mrest_.data(), mnb_rest_.data(), b, moving_share_);
     mimp_.zero();
-  }
-
-  FluidArrays arrays() {
-    FluidArrays a;
-    a.space = Exec::kSpace;
-    a.n = n_;
-    a.x = x_.data();
-    a.v = v_.data();
-    a.id = id_.data();
-    a.mass = P_.mass;
-    a.radius = P_.spacing / Real(2);
-    return a;
   }
 
   FluidView view() {
@@ -511,7 +624,7 @@ class SolverT final : public FluidSolver {
     return it;
   }
 
-  int emit(double dt) {
+  int emit_layers(double dt) {
     int emitted = 0;
     for (std::size_t e = 0; e < model_.emitters.size(); ++e) {
       const EmitterModel& em = model_.emitters[e];
@@ -548,7 +661,7 @@ class SolverT final : public FluidSolver {
   SphParams P_;
   Exec ex_;
   int n_ = 0, cap_ = 0;
-  double t_ = 0, last_dt_ = 0, last_error_ = 0;
+  double t_ = 0, last_error_ = 0;
   long steps_ = 0;
   Buffer<Vec3> x_, v_, a_, tmp3_;
   Buffer<Real> rho_, p_, alpha_, kappa_, ksum_, tmpr_;
@@ -567,8 +680,10 @@ class SolverT final : public FluidSolver {
   std::vector<double> travelled_;
   std::uint32_t next_id_ = 0;
   bool capacity_warned_ = false;
-  Profile prof_;
+  StepProfile prof_;
   StepHook* hook_ = nullptr;
+  double dt_ = 0;    // this step's length (time_step)
+  Real pace_ = 1;    // dt_ over the CFL step it shortened
   static constexpr int kMinSweeps = 2;
 
   // Near-surface density: the hook's proximity of this step, and the half-space integrals.

@@ -9,7 +9,8 @@
 //   which the body solver adds to its next step's right-hand side).
 // Hits are grouped by face as in paper §4.3: (face, particle) pairs radix-sorted by face, run
 // starts by a scan, then one thread per face, so particle velocities are written without
-// atomics; node impulses use atomic adds (a node is shared by several faces).
+// atomics; node impulses (a node is shared by several faces) are listed per face and summed
+// node by node in a fixed order, so a run gives the same bits on any thread count.
 //
 // Why impulses into the next body step rather than v += J / m on the nodes now: for linear
 // elasticity both lead to the same linear system of the implicit step (only the rotations

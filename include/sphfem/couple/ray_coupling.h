@@ -1,8 +1,8 @@
-// The paper's ray-traced two-way coupling as one fluid StepHook: inside each fluid step the
-// bodies take the same dt, their surface BVH is refit over the step, every particle casts one
-// ray along its motion relative to the surfaces (bodies and, optionally, the tank's faces as
-// static colliders), the drift stops a skin short of the nearest hit (eq. 6), and after the
-// drift the Coupler exchanges impulses per face. An exact test of each particle's actual path
+// The paper's ray-traced two-way coupling, as the coupling stages of Simulation::step
+// (core/profile.h): after the bodies took the fluid's dt, their surface BVH is refit over the
+// step, every particle casts one ray along its motion relative to the surfaces (bodies and,
+// optionally, the tank's faces as static colliders), the drift stops a skin short of the
+// nearest hit (eq. 6), and after the drift the Coupler exchanges impulses per face. An exact test of each particle's actual path
 // against every body face moving linearly over the step finds the particles that met a
 // surface anyway (another face than the nearest one, or a face that turned within the step),
 // puts them a skin in front of it and counts what still meets one (`crossed`), so leakage is
@@ -21,7 +21,7 @@
 
 namespace sphfem {
 
-// The bodies' step inside the fluid step failed (non-finite solve); the runner reports it.
+// The bodies' step failed (non-finite solve); the runner reports it.
 struct BodyStepError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
@@ -54,13 +54,32 @@ struct RayCouplingStats {
   long corrected = 0;  // contacts found after the drift and put back in front of the face
   int rebuilds = 0;
   long near_surface = 0;  // particle-steps with a body surface within the kernel's support
-  double ms_fem = 0, ms_collide = 0, ms_couple = 0, ms_leak_check = 0;
-  BodyStepInfo last_body_step;
+  double ms_leak_check = 0;  // the exact test's first pass (a part of contact_fix)
   std::vector<Vec3d> body_impulse;  // N s given to each body by the fluid
 };
 
-class RayCoupling : public StepHook {
+// Not the owner of the bodies: Simulation steps them between pressure() and cast().
+class RayCoupling : public SurfaceQuery {
  public:
+  // The stages, in the order Simulation::step calls them; each finishes its work before it
+  // returns. proximity() and moving_boundary() (SurfaceQuery) come first.
+  // The pressure the near-surface density gave the particles, back to the faces' nodes; what
+  // the fluid gave each body since its last step goes to the stats; the nodes' positions are
+  // remembered as the start of the bodies' step.
+  virtual void before_bodies(const FluidArrays& fluid) = 0;
+  // After the bodies' step: BVH refit over it, the rays, and each particle's travel fraction
+  // (the baseline: only what the leak check needs).
+  virtual DriftLimits cast(const FluidArrays& fluid, double dt) = 0;
+  // After the drift: particles pushed a skin in front of the faces they hit, then the exact
+  // contact test of every path against the moving faces and its fix (counts `crossed`).
+  virtual void fix_contacts(const FluidArrays& fluid) = 0;
+  // The per-face momentum exchange: -J to the particles now, +J into the nodes' impulses.
+  virtual void exchange(const FluidArrays& fluid) = 0;
+
+  // The bodies were moved outside a step (a state was loaded): the BVH is built again over
+  // where they are now.
+  virtual void bodies_moved() = 0;
+
   virtual const RayCouplingStats& stats() const = 0;
   virtual void reset_stats() = 0;
 };

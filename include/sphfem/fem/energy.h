@@ -20,9 +20,17 @@ class BodyEnergyMeter {
   // One value per body: 1/2 sum m v^2 (J) and sum V (mu |eps|^2 + lambda/2 tr(eps)^2) (J).
   void measure(const BodySnapshot& s, std::vector<double>& kinetic, std::vector<double>& elastic);
 
+  // The rotations the next call starts from: part of a run's checkpoint, so that a resumed
+  // run measures the same bits.
+  const std::vector<Quat>& rotations() const { return rot_; }
+  void set_rotations(const std::vector<Quat>& r) {
+    if (r.size() == rot_.size()) rot_ = r;
+  }
+
  private:
   const BodiesModel& model_;
   std::vector<Quat> rot_;
+  std::vector<double> element_energy_;
 };
 
 }  // namespace sphfem

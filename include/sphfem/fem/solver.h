@@ -21,6 +21,7 @@
 #include "sphfem/core/backend.h"
 #include "sphfem/core/memory.h"
 #include "sphfem/fem/model.h"
+#include "sphfem/fem/state.h"
 
 namespace sphfem {
 
@@ -83,6 +84,11 @@ class BodySolver {
   virtual void set_velocities(const std::vector<Vec3>& v) = 0;
   // Elastic forces (N, one per node) at the current positions.
   virtual void elastic_forces(std::vector<Vec3>& f) = 0;
+
+  // The state's exact image (fem/state.h); load() continues from it bit for bit and throws
+  // std::invalid_argument for a state of another model.
+  virtual void save(BodyState& out) const = 0;
+  virtual void load(const BodyState& in) = 0;
 
   virtual BodyArrays arrays() = 0;
   virtual const BodyProfile& profile() const = 0;

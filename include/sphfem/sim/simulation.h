@@ -10,23 +10,43 @@
 #include "sphfem/couple/ray_coupling.h"
 #include "sphfem/fem/model.h"
 #include "sphfem/fem/solver.h"
+#include "sphfem/scene/compile.h"
 #include "sphfem/scene/spec.h"
 #include "sphfem/sph/model.h"
 #include "sphfem/sph/solver.h"
+#include "sphfem/sim/state.h"
+#include "sphfem/core/profile.h"
 
 namespace sphfem {
 
+// One coupled step is Simulation::step, read top to bottom: its stages (core/profile.h) are
+// named calls on the fluid solver, the body solver and the coupling, each timed into one
+// StepProfile. The compiled models are fixed at construction; the state lives in the solvers
+// (in the backend's memory) and save()/load() give its exact plain image (sim/state.h).
 class Simulation {
  public:
   // Compiles the scene's fluid and bodies and builds the solvers; throws SceneError or
   // std::runtime_error on input that cannot run (before anything is stepped).
   Simulation(const SceneSpec& scene, Backend backend);
 
-  // One step: the fluid's (CFL-limited, at most dt_limit) with the bodies inside it when the
-  // coupling is ray-traced; bodies alone (no fluid) take dt_limit. Throws SimulationError,
-  // and BodyStepError when a body's solve is not finite.
+  // One step: the fluid's (CFL-limited, at most dt_limit) with the bodies taking the same dt;
+  // bodies alone (no fluid) take dt_limit. Throws SimulationError, and BodyStepError when a
+  // body's solve is not finite.
   StepInfo step(double dt_limit);
   double time() const;
+  long steps() const;
+
+  // The fluid at its present positions (densities from the coupling's surfaces too). Reading
+  // changes no state.
+  void snapshot(FluidSnapshot& out);
+
+  // The state's exact image, and continuing from one (of a Simulation of the same scene).
+  // load() throws std::invalid_argument for a state that does not fit.
+  void save(SimState& out) const;
+  void load(const SimState& in);
+
+  const StepProfile& profile() const { return profile_; }
+  void reset_profile();
 
   // Particles inside a body's closed surface now (a host BVH over the current positions).
   long count_inside();
@@ -36,24 +56,24 @@ class Simulation {
   const SceneSpec& scene() const { return scene_; }
   FluidSolver* fluid() { return fluid_.get(); }
   BodySolver* bodies() { return bodies_.get(); }
-  RayCoupling* coupling() { return hook_.get(); }
+  RayCoupling* coupling() { return coupling_.get(); }
   const FluidModel& fluid_model() const { return fluid_model_; }
   const BodiesModel& bodies_model() const { return bodies_model_; }
-  // True when the bodies step inside the fluid step (ray-traced coupling with fluid).
-  bool bodies_in_fluid_step() const { return hook_ && bodies_; }
 
  private:
+  template <class F>
+  void timed(Stage s, F&& fn);
+  void step_bodies(double dt);
+
   SceneSpec scene_;
   FluidModel fluid_model_;
   BodiesModel bodies_model_;
   std::unique_ptr<FluidSolver> fluid_;
   std::unique_ptr<BodySolver> bodies_;
-  std::unique_ptr<RayCoupling> hook_;
+  std::unique_ptr<RayCoupling> coupling_;
   std::unique_ptr<Collider> inside_check_;
+  StepProfile profile_;
   double t_bodies_ = 0;  // without fluid
 };
-
-// The coupling settings a scene asks for.
-RayCouplingSettings ray_coupling_settings(const SceneSpec& scene);
 
 }  // namespace sphfem

@@ -10,8 +10,10 @@
 
 #include "sphfem/core/backend.h"
 #include "sphfem/core/memory.h"
+#include "sphfem/core/profile.h"
 #include "sphfem/sph/model.h"
 #include "sphfem/sph/moving_boundary.h"
+#include "sphfem/sph/state.h"
 
 namespace sphfem {
 
@@ -19,26 +21,6 @@ namespace sphfem {
 struct SimulationError : std::runtime_error {
   long step;
   SimulationError(long step_, const std::string& what) : std::runtime_error(what), step(step_) {}
-};
-
-// Coupling: the time a StepHook takes (with bodies: their step, the ray casts and impulses).
-enum class Phase {
-  Neighbors,
-  Density,
-  Divergence,
-  Forces,
-  Pressure,
-  Integrate,
-  Emit,
-  Coupling,
-  Count
-};
-const char* phase_name(Phase p);
-
-struct Profile {
-  double ms[int(Phase::Count)] = {};
-  long steps = 0;
-  void clear() { *this = Profile(); }
 };
 
 struct StepInfo {
@@ -95,22 +77,22 @@ struct SurfaceProximity {
   Vec3* dv = nullptr;
 };
 
-// Code run inside a fluid step, for two-way coupling. The step is:
-//   moving_boundary   boundary-particle coupling: where the sampled surface is now
-//   sort              particles re-ordered by grid cell
-//   proximity         ray-traced coupling: each particle's closest surface
-//   density, forces and pressure (v becomes v*); the samples' impulse goes to the nodes
-//   before_drift, drift (x += dt v* limited by the returned DriftLimits, then the last-resort
-//   box), after_drift, emit.
-// A coupler steps the bodies over the same dt, casts rays and returns travel fractions in
-// before_drift, and exchanges impulses in after_drift. Arrays returned must stay valid until
-// after_drift; the backend's work must be finished when a call returns. moving_boundary and
-// proximity are queries of the present state: snapshot() calls them too (after its own sort).
-class StepHook {
+// What a fluid step asks of the solid surfaces around it, at the particles' present positions:
+// the boundary-particle baseline's sampled surface, and each particle's closest surface for
+// the near-surface density. Queries only: snapshot() asks them too.
+class SurfaceQuery {
  public:
-  virtual ~StepHook() = default;
+  virtual ~SurfaceQuery() = default;
   virtual MovingSurface moving_boundary(const FluidArrays&) { return MovingSurface(); }
   virtual SurfaceProximity proximity(const FluidArrays&) { return SurfaceProximity(); }
+};
+
+// Code run inside FluidSolver::step for a fluid alone with a solid of its own (tests, simple
+// embeddings); a coupled scene is stepped by Simulation::step, stage by stage, instead.
+// before_drift returns the drift's limits (arrays valid until after_drift), after_drift
+// follows it. The backend's work must be finished when a call returns.
+class StepHook : public SurfaceQuery {
+ public:
   virtual DriftLimits before_drift(const FluidArrays& fluid, double dt) = 0;
   virtual void after_drift(const FluidArrays& fluid, double dt) = 0;
 };
@@ -121,16 +103,48 @@ class FluidSolver {
   virtual int count() const = 0;
   virtual double time() const = 0;
   virtual long steps() const = 0;
-  // One step of at most dt_limit seconds (and the CFL limit). Throws SimulationError.
+
+  // One step of at most dt_limit seconds (and the CFL limit): the stages below in order, with
+  // the hook (if any) around the drift. Throws SimulationError.
   virtual StepInfo step(double dt_limit) = 0;
-  virtual void snapshot(FluidSnapshot& out) = 0;
-  virtual const Profile& profile() const = 0;
+
+  // The stages of one step, in the order Simulation::step calls them (core/profile.h). Each
+  // finishes its work before it returns; the particles keep their order from sort() to the
+  // end of the step.
+  // Boundary samples placed on `moving` (the baseline; empty: none), particles re-sorted by
+  // grid cell.
+  virtual void sort(const MovingSurface& moving) = 0;
+  // Neighbour lists and densities, with the near-surface density of `near` (kept for the
+  // step's later stages; its dv collects the surface pressure's velocity change).
+  virtual void density(const SurfaceProximity& near) = 0;
+  // The step's length: the CFL limit capped by dt_max and dt_limit. Throws SimulationError.
+  virtual double time_step(double dt_limit, StepInfo& info) = 0;
+  virtual void divergence(StepInfo& info) = 0;  // DFSPH divergence solve; WCSPH: nothing
+  virtual void forces(StepInfo& info) = 0;      // non-pressure forces (WCSPH: all), kick
+  // DFSPH density solve (v becomes v*); then the samples' impulse into moving.impulse.
+  virtual void pressure(StepInfo& info) = 0;
+  // x += dt v*, limited by `limits`, then the last-resort box; time advances.
+  virtual void drift(const DriftLimits& limits, StepInfo& info) = 0;
+  virtual void emit(StepInfo& info) = 0;
+  // The particles in the step's order, in the solver's memory space.
+  virtual FluidArrays arrays() = 0;
+
+  // The particles with density, pressure and neighbour counts at their present positions
+  // (surfaces from `surfaces`, else the hook's). Changes no state: a step after it gives the
+  // same bits as without it.
+  virtual void snapshot(FluidSnapshot& out, SurfaceQuery* surfaces = nullptr) = 0;
+  // The state's exact image (sph/state.h); load() continues from it bit for bit. load()
+  // throws std::invalid_argument for a state that does not fit this model.
+  virtual void save(FluidState& out) const = 0;
+  virtual void load(const FluidState& in) = 0;
+
+  virtual const StepProfile& profile() const = 0;
   virtual void reset_profile() = 0;
   virtual const FluidModel& model() const = 0;
-  // Runs hook inside every step from now on (nullptr: none); not owned, must outlive its use.
+  // Runs hook inside every step() from now on (nullptr: none); not owned, must outlive its use.
   virtual void set_hook(StepHook* hook) = 0;
   // Boundary-particle coupling: samples (sample_surface) on the triangles tris of a surface
-  // of `nodes` nodes, placed every step at the hook's moving_boundary. Replaces the samples
+  // of `nodes` nodes, placed every step on the surface sort() is given. Replaces the samples
   // set before; empty: none. Throws std::invalid_argument for a triangle or node out of range.
   virtual void set_moving_samples(const std::vector<SurfaceSample>& samples,
                                   const std::vector<Tri>& tris, int nodes) = 0;
