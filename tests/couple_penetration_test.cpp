@@ -13,6 +13,7 @@
 
 #include "couple_harness.h"
 #include "sphfem/couple/coupler.h"
+#include "sphfem/scene/compile.h"
 #include "sphfem/sph/solver.h"
 
 using namespace sphfem;

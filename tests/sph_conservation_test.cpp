@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "sphfem/scene/compile.h"
 #include "sphfem/sph/solver.h"
 
 using namespace sphfem;

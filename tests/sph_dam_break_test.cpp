@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "sphfem/scene/compile.h"
 #include "sphfem/sph/solver.h"
 
 using namespace sphfem;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sph_profile.h"
+#include "sphfem/scene/compile.h"
 #include "sphfem/sph/solver.h"
 
 using namespace sphfem;

@@ -18,6 +18,7 @@
 
 #include "sph_profile.h"
 #include "sphfem/fem/mesh.h"
+#include "sphfem/scene/compile.h"
 #include "sphfem/sph/moving_boundary.h"
 #include "sphfem/sph/solver.h"
 

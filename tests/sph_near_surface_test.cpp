@@ -17,6 +17,7 @@
 #include "sphfem/collide/collider.h"
 #include "sphfem/couple/coupler.h"
 #include "sphfem/fem/mesh.h"
+#include "sphfem/scene/compile.h"
 #include "sphfem/sph/solver.h"
 #include "sphfem/sph/surface_density.h"
 

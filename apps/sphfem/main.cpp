@@ -8,6 +8,7 @@
 #include "bench.h"
 #include "render_cmd.h"
 #include "sphfem/scene/bodies.h"
+#include "sphfem/scene/compile.h"
 #include "sphfem/scene/fields.h"
 #include "sphfem/scene/load.h"
 #include "sphfem/sim/run.h"

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sph/stages.h"
+#include "sphfem/fem/mesh.h"
 
 namespace sphfem::stages {
 

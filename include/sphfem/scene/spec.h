@@ -1,6 +1,6 @@
 // What a scene file says, in SI units, after loading and validation.
 // JSON -> SceneSpec (this file) -> compiled fluid model (sph/model.h) and bodies model
-// (scene/bodies.h) -> state.
+// (fem/model.h), both made in scene/compile.h -> state.
 #pragma once
 
 #include <string>
@@ -9,10 +9,10 @@
 #include "sphfem/core/vec.h"
 #include "sphfem/fem/model.h"
 #include "sphfem/fem/tetrahedralize.h"
+#include "sphfem/sph/solver_kind.h"
 
 namespace sphfem {
 
-enum class SolverKind { WCSPH, DFSPH };
 enum class KernelKind { CubicSpline, WendlandC2 };
 
 struct SimulationSpec {

@@ -1,32 +1,32 @@
-// The compiled fluid model: everything a solver needs, derived once from a scene.
+// The compiled fluid model: everything a solver needs, derived once from a scene (by
+// compile_fluid in scene/compile.h; the fluid itself knows nothing of scenes).
 // Model apart from state: this is immutable during a run; FluidSolver owns the state.
 #pragma once
 
-#include <string>
 #include <vector>
 
 #include "sphfem/core/vec.h"
-#include "sphfem/scene/spec.h"
 #include "sphfem/sph/kernels.h"
+#include "sphfem/sph/solver_kind.h"
 
 namespace sphfem {
 
 // Plain values copied into every kernel launch.
 struct SphParams {
   Kernel kernel;
-  Real h = 0, h2 = 0;        // support radius and its square
-  Real spacing = 0;          // lattice spacing d = 2 * particle radius
-  Real mass = 0;             // per particle, so a full lattice has exactly rest density
+  Real h = 0, h2 = 0;  // support radius and its square
+  Real spacing = 0;    // lattice spacing d = 2 * particle radius
+  Real mass = 0;       // per particle, so a full lattice has exactly rest density
   Real rho0 = 0;
-  Real volume = 0;           // mass / rho0
-  Real stiffness = 0;        // WCSPH: p = stiffness * (rho/rho0 - 1), p >= 0
-  Real sound_speed = 0;      // sqrt(stiffness / rho0)
-  Real viscosity = 0;        // kinematic, m^2/s
+  Real volume = 0;       // mass / rho0
+  Real stiffness = 0;    // WCSPH: p = stiffness * (rho/rho0 - 1), p >= 0
+  Real sound_speed = 0;  // sqrt(stiffness / rho0)
+  Real viscosity = 0;    // kinematic, m^2/s
   Real xsph = 0;
-  Real alpha_av = 0;         // Monaghan artificial viscosity
+  Real alpha_av = 0;  // Monaghan artificial viscosity
   Vec3 gravity;
-  Vec3 clamp_lo, clamp_hi;   // last-resort box no particle may leave (the tank's inner faces)
-  int full_neighbors = 0;    // neighbours of a particle inside a full lattice
+  Vec3 clamp_lo, clamp_hi;  // last-resort box no particle may leave (the tank's inner faces)
+  int full_neighbors = 0;   // neighbours of a particle inside a full lattice
 };
 
 struct GridGeometry {
@@ -39,8 +39,8 @@ struct GridGeometry {
 struct EmitterModel {
   Vec3 position, direction;
   Real speed = 0, start = 0, end = 0;
-  Real layer_spacing = 0;        // distance travelled between two emitted layers
-  std::vector<Vec3> disc;        // offsets of one layer's particles from the nozzle centre
+  Real layer_spacing = 0;  // distance travelled between two emitted layers
+  std::vector<Vec3> disc;  // offsets of one layer's particles from the nozzle centre
 };
 
 struct FluidModel {
@@ -50,27 +50,14 @@ struct FluidModel {
   double density_tolerance = 1e-3, divergence_tolerance = 1e-3;
   int max_iterations = 100;
   GridGeometry grid;
-  std::vector<Vec3> x0, v0;              // initial particles (blocks)
-  std::vector<Vec3> boundary_x;          // static wall samples
-  std::vector<Real> boundary_psi;        // their mass contribution (Akinci et al. 2012 psi)
+  std::vector<Vec3> x0, v0;        // initial particles (blocks)
+  std::vector<Vec3> boundary_x;    // static wall samples
+  std::vector<Real> boundary_psi;  // their mass contribution (Akinci et al. 2012 psi)
   std::vector<EmitterModel> emitters;
-  int capacity = 0;                      // most particles the run can hold
+  int capacity = 0;  // most particles the run can hold
 };
-
-// Builds the model; throws std::runtime_error for inconsistent input the loader cannot see.
-FluidModel compile_fluid(const SceneSpec& scene);
 
 // Particle mass giving rest density on a cubic lattice of the given spacing (kernel sum).
 Real lattice_mass(const Kernel& kernel, Real spacing, Real rho0);
-
-// Stiffness the scene asks for, or one derived from the fastest expected speed (c = 10 v).
-double wcsph_stiffness(const SceneSpec& scene);
-
-// Largest stable WCSPH step for a speed bound v (acoustic CFL).
-double wcsph_dt_limit(const SceneSpec& scene, double v);
-
-// Checks that need the solver's knowledge (time step against CFL). Returns "" when fine,
-// else a one-line message "<json.path>: <what>; <fix>".
-std::string check_solver_settings(const SceneSpec& scene);
 
 }  // namespace sphfem
