@@ -16,7 +16,6 @@
 #include <limits>
 #include <map>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -24,6 +23,7 @@
 #include "bench.h"
 #include "sphfem/io/atomic_file.h"
 #include "sphfem/io/ply.h"
+#include "sphfem/io/run_info.h"
 #include "sphfem/io/vtu.h"
 #include "sphfem/io/xml.h"
 #include "sphfem/render/camera.h"
@@ -91,9 +91,9 @@ std::vector<FrameFiles> list_frames(const std::string& dir) {
     const auto files = read_pvd(dir + "/bodies.pvd");
     for (std::size_t i = 0; i < files.size(); ++i) add(files[i], false, long(i));
   }
-  if (!fluid_pvd && fs::is_directory(dir + "/frames")) {
+  if (!fluid_pvd && fs::is_directory(io::frames_dir(dir))) {
     std::vector<std::string> ply;
-    for (const auto& e : fs::directory_iterator(dir + "/frames")) {
+    for (const auto& e : fs::directory_iterator(io::frames_dir(dir))) {
       const std::string name = e.path().filename().string();
       if (name.rfind("fluid_", 0) == 0 && e.path().extension() == ".ply" &&
           frame_number(name, -1) >= 0)
@@ -128,43 +128,15 @@ struct CameraSpec {
   double fov = 0;
 };
 
-struct RunInfo {
-  double radius = 0;
-  Vec3d lo, hi;
-  bool known = false;
-  double fps = 30;
-  CameraSpec camera;
-};
-
-std::vector<double> json_vec3(const nlohmann::json& j) {
-  return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()};
-}
-
-RunInfo read_run_info(const std::string& path) {
-  RunInfo t;
-  if (!fs::exists(path)) return t;
-  try {
-    const nlohmann::json j = nlohmann::json::parse(slurp(path));
-    t.radius = j.at("particle_radius").get<double>();
-    const auto lo = json_vec3(j.at("domain").at("min")), hi = json_vec3(j.at("domain").at("max"));
-    t.lo = Vec3d(lo[0], lo[1], lo[2]);
-    t.hi = Vec3d(hi[0], hi[1], hi[2]);
-    if (j.contains("fps")) t.fps = j.at("fps").get<double>();
-    // Optional: where a run asks to be seen from.
-    if (j.contains("camera")) {
-      const auto& c = j.at("camera");
-      if (c.contains("position")) t.camera.position = json_vec3(c.at("position"));
-      if (c.contains("target")) t.camera.target = json_vec3(c.at("target"));
-      if (c.contains("fov")) t.camera.fov = c.at("fov").get<double>();
-    }
-  } catch (const nlohmann::json::exception& e) {
-    throw std::runtime_error("'" + path + "' is not a run description (" + e.what() +
-                             "); run the scene again or delete the file to guess from the frames");
-  }
-  if (!(t.radius > 0))
-    throw std::runtime_error("'" + path + "' gives particle_radius <= 0; run the scene again");
-  t.known = true;
-  return t;
+// run.json's camera in the form the command line gives one: empty = not given.
+CameraSpec camera_spec(const io::RunInfo& info) {
+  CameraSpec c;
+  if (!info.camera) return c;
+  auto vec = [](const Vec3d& v) { return std::vector<double>{v.x, v.y, v.z}; };
+  if (info.camera->position) c.position = vec(*info.camera->position);
+  if (info.camera->target) c.target = vec(*info.camera->target);
+  c.fov = info.camera->fov;
+  return c;
 }
 
 // Half the median distance to the nearest other particle, over an even sample of particles.
@@ -402,7 +374,9 @@ int run_render(const RenderOptions& opt) {
                              dir + "` and let it write at least one frame");
   const std::vector<FrameFiles> frames = select_frames(all, opt.frames, dir);
 
-  RunInfo info = read_run_info(dir + "/run.json");
+  // Runs from before run.json have only frames: the radius and tank are guessed below.
+  const bool known = io::run_info_exists(dir);
+  io::RunInfo info = known ? io::read_run_info(dir) : io::RunInfo();
   const bool video = opt.format == "mp4";
   const std::string images = dir + "/images", video_path = dir + "/video.mp4";
   // Every check before the first frame: ffmpeg is there, the renderer starts.
@@ -419,24 +393,25 @@ int run_render(const RenderOptions& opt) {
   for (const FrameFiles& f : frames) {
     LoadedFrame lf = load_frame(dir, f);
     if (&f == &frames.front()) {
-      if (!info.known) {
+      if (!known) {
         // An older run without run.json: guess once, from the first frame, so the camera
         // stays put for the rest.
-        info.radius = estimate_radius(lf.frame.particles);
+        info.particle_radius = estimate_radius(lf.frame.particles);
         render::RenderFrame probe = lf.frame;
-        probe.radius = float(info.radius);
-        if (!render::frame_bounds(probe, &info.lo, &info.hi)) info.lo = info.hi = Vec3d();
+        probe.radius = float(info.particle_radius);
+        if (!render::frame_bounds(probe, &info.domain_min, &info.domain_max))
+          info.domain_min = info.domain_max = Vec3d();
         std::fprintf(stderr,
-                     "%s/run.json not found: guessed particle radius %.4g m and the frame's "
+                     "%s not found: guessed particle radius %.4g m and the frame's "
                      "bounding box as the tank\n",
-                     dir.c_str(), info.radius);
+                     io::run_json_path(dir).c_str(), info.particle_radius);
       }
-      lo = info.lo;
-      hi = info.hi;
-      cam = choose_camera(opt, info.camera, lo, hi, width, height);
+      lo = info.domain_min;
+      hi = info.domain_max;
+      cam = choose_camera(opt, camera_spec(info), lo, hi, width, height);
     }
-    lf.frame.radius = float(info.radius);
-    lf.frame.has_box = info.known;
+    lf.frame.radius = float(info.particle_radius);
+    lf.frame.has_box = known;
     lf.frame.box_lo = lo;
     lf.frame.box_hi = hi;
     const render::Image img = painter.draw(lf, cam, lo, hi);
