@@ -2,6 +2,9 @@
 # (scripts/install-deps.sh), configure and build Release in build/release.
 BUILD ?= build/release
 JOBS ?= $(shell nproc)
+# Haswell-level x86 (AVX2, FMA): every machine we build on has it, and one instruction set
+# gives the same bits everywhere, which the committed state hashes rely on (docs/design.md).
+MARCH ?= x86-64-v3
 CMAKE_ARGS ?=
 DEMO_SCENE ?= scenes/default.json
 DEMO_OUT ?= out/default
@@ -17,7 +20,7 @@ assets:
 	@bash scripts/fetch-bunny.sh build/assets || echo "note: the bunny mesh was not fetched (scenes/paper/bunny.json and dragon.json need it)"
 
 configure: deps assets
-	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DSPHFEM_MARCH=native -DSPHFEM_ENABLE_GL=ON $(CMAKE_ARGS) >/dev/null
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DSPHFEM_MARCH=$(MARCH) -DSPHFEM_ENABLE_GL=ON $(CMAKE_ARGS) >/dev/null
 
 build: configure
 	@cmake --build $(BUILD) -j$(JOBS)

@@ -90,7 +90,8 @@ int run_bench(const BenchOptions& opt) {
     io::ensure_directory(opt.out_dir);
     const std::string path = opt.out_dir + "/sph_dam_break.csv";
     std::string header = "date,device,threads,backend,solver,particles,steps";
-    for (int k = 0; k < int(Stage::Count); ++k) header += ",ms_" + std::string(stage_name(Stage(k)));
+    for (int k = 0; k < int(Stage::Count); ++k)
+      header += ",ms_" + std::string(stage_name(Stage(k)));
     header += ",ms_step,mparticle_steps_per_s,pressure_iterations";
     std::string first;
     if (std::ifstream old(path); old) std::getline(old, first);

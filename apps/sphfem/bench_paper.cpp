@@ -1,7 +1,7 @@
 // `sphfem bench --paper`: the paper's Table 1 workload for each of its scenes
 // (scenes/paper/*.json): the scene's body with 64,800 particles falling onto it as one block,
-// measured once the block has reached the body (0.02 s after the first impulse on it). Prints FEM, SPH and coupling ms per step
-// beside the paper's own numbers, with the leak counts.
+// measured once the block has reached the body (0.02 s after the first impulse on it). Prints FEM,
+// SPH and coupling ms per step beside the paper's own numbers, with the leak counts.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -97,10 +97,10 @@ Measured measure(const SceneSpec& scene, Backend backend, int steps) {
   const StepProfile& p = sim.profile();
   auto ms = [&](Stage st) { return p.ms[int(st)] / steps; };
   m.fem = ms(Stage::Fem);
-  m.coupling = ms(Stage::Proximity) + ms(Stage::Collide) + ms(Stage::ContactFix) +
-               ms(Stage::Exchange);
-  m.sph = ms(Stage::Neighbors) + ms(Stage::Density) + ms(Stage::Divergence) +
-          ms(Stage::Forces) + ms(Stage::Pressure) + ms(Stage::Drift) + ms(Stage::Emit);
+  m.coupling =
+      ms(Stage::Proximity) + ms(Stage::Collide) + ms(Stage::ContactFix) + ms(Stage::Exchange);
+  m.sph = ms(Stage::Neighbors) + ms(Stage::Density) + ms(Stage::Divergence) + ms(Stage::Forces) +
+          ms(Stage::Pressure) + ms(Stage::Drift) + ms(Stage::Emit);
   if (hook) {
     const RayCouplingStats& s = hook->stats();
     m.leak_check = s.ms_leak_check / steps;

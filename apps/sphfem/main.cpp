@@ -12,6 +12,7 @@
 #include "sphfem/scene/fields.h"
 #include "sphfem/scene/load.h"
 #include "sphfem/sim/run.h"
+#include "sphfem/sim/state.h"
 #include "sphfem/sph/solver.h"
 #include "view_cmd.h"
 
@@ -85,7 +86,7 @@ int cmd_check(const std::string& path) {
 }
 
 int cmd_run(const std::string& path, const std::string& out, const std::string& backend,
-            int threads, double duration, bool quiet) {
+            int threads, double duration, bool quiet, bool resume) {
   const SceneSpec s = load_scene(path);
   RunOptions opt;
   opt.out_dir = out.empty() ? default_out(path) : out;
@@ -93,6 +94,7 @@ int cmd_run(const std::string& path, const std::string& out, const std::string& 
   opt.threads = threads;
   opt.duration = duration;
   opt.progress = !quiet;
+  opt.resume = resume;
   try {
     const RunSummary r = run_scene(s, opt);
     std::printf(
@@ -106,8 +108,9 @@ int cmd_run(const std::string& path, const std::string& out, const std::string& 
           r.crossed, r.inside_max);
     std::string files = s.has_fluid() ? "fluid.pvd, " : "";
     if (r.bodies > 0) files += "bodies.pvd, bodies_tets.pvd, ";
-    std::printf("output: %s (%d frames in frames/, %sgauges.csv)\n", r.out_dir.c_str(), r.frames,
-                files.c_str());
+    std::printf("state hash %s at t = %.6g s\n", hash_hex(r.state_hash).c_str(), r.sim_seconds);
+    std::printf("output: %s (%d frames in frames/, %sgauges.csv, checkpoint.bin)\n",
+                r.out_dir.c_str(), r.frames, files.c_str());
   } catch (const SimulationError& e) {
     std::fprintf(stderr, "error: %s: %s\n", path.c_str(), e.what());
     std::fprintf(stderr, "frames written so far are kept in %s\n", opt.out_dir.c_str());
@@ -135,6 +138,9 @@ int main(int argc, char** argv) {
   run->add_option("--duration", duration, "simulated seconds (overrides the scene)")
       ->check(CLI::NonNegativeNumber);
   run->add_flag("--quiet", quiet, "no progress line");
+  bool resume = false;
+  run->add_flag("--resume", resume,
+                "continue from the checkpoint in the output folder (output.checkpoint_every)");
 
   auto* check = app.add_subcommand("check", "validate a scene and print what would run");
   check->add_option("scene", scene, "scene file (JSON)")->required();
@@ -176,7 +182,7 @@ int main(int argc, char** argv) {
   try {
     if (*check) return cmd_check(scene);
     if (*run) {
-      const int code = cmd_run(scene, out, backend, threads, duration, quiet);
+      const int code = cmd_run(scene, out, backend, threads, duration, quiet, resume);
       if (code != 0 || !render_after) return code;
       render_opt.out_dir = out.empty() ? default_out(scene) : out;
       return run_render(render_opt);

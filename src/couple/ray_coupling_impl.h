@@ -207,9 +207,10 @@ class RayCouplingT final : public RayCoupling {
     const Vec3* dv = near_dv_.data();
     const Tri* tris = a.surface;
     const Real m = f.mass;
-    stats_.near_surface += long(
-        reduce_sum(ex_, f.n, [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; }) +
-        0.5);
+    stats_.near_surface +=
+        long(reduce_sum(ex_, f.n,
+                        [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; }) +
+             0.5);
     node_sums_.add(
         ex_, 3 * f.n, a.nodes,
         [=] SPHFEM_LAMBDA(int k, int& node, Vec3& value) {

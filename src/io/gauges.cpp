@@ -2,10 +2,14 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <utility>
+
+#include "sphfem/io/atomic_file.h"
 
 namespace sphfem::io {
 namespace {
@@ -54,6 +58,38 @@ GaugeWriter::GaugeWriter(const std::string& path, std::vector<std::string> colum
     std::fclose(file_);  // the destructor does not run for a throwing constructor
     throw;
   }
+}
+
+GaugeWriter::GaugeWriter(const std::string& path, std::vector<std::string> columns,
+                         std::size_t keep_rows)
+    : path_(path), columns_(std::move(columns)) {
+  std::ifstream in(path_);
+  const std::string fix = "; run again without --resume";
+  if (!in)
+    throw std::runtime_error("cannot resume gauge file '" + path_ + "': it is missing" + fix);
+  std::string header, line, kept;
+  std::getline(in, header);
+  std::string expected;
+  for (std::size_t i = 0; i < columns_.size(); ++i)
+    expected += (i ? "," : "") + csv_field(columns_[i]);
+  if (header != expected)
+    throw std::runtime_error("cannot resume gauge file '" + path_ +
+                             "': its columns are not this scene's" + fix);
+  kept = header + "\n";
+  while (kept_times_.size() < keep_rows && std::getline(in, line)) {
+    if (line.empty()) break;
+    kept += line + "\n";
+    kept_times_.push_back(std::strtod(line.c_str(), nullptr));
+  }
+  if (kept_times_.size() < keep_rows)
+    throw std::runtime_error("cannot resume gauge file '" + path_ + "': it has " +
+                             std::to_string(kept_times_.size()) + " rows, the checkpoint follows " +
+                             std::to_string(keep_rows) + fix);
+  in.close();
+  write_file_atomic(path_, kept);
+  file_ = std::fopen(path_.c_str(), "a");
+  if (!file_)
+    throw std::runtime_error("cannot open gauge file '" + path_ + "': " + std::strerror(errno));
 }
 
 GaugeWriter::~GaugeWriter() {

@@ -364,6 +364,10 @@ const ObjectTable& output_table() {
           .vec3("camera_target", &OutputSpec::camera_target, "m", "The point the camera looks at.")
           .number("camera_fov", &OutputSpec::camera_fov, "degrees", Range().gt(1).lt(170),
                   "Vertical field of view of the pictures.")
+          .number("checkpoint_every", &OutputSpec::checkpoint_every, "s", kNonNegative,
+                  "Simulated time between checkpoints (`checkpoint.bin` in the output folder, "
+                  "written after the frame that reaches each multiple, and at the end); 0 = "
+                  "only at the end. `sphfem run SCENE --out DIR --resume` continues from it.")
           .build();
   return t;
 }

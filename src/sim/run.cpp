@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -21,11 +20,14 @@
 #include "sphfem/io/gauges.h"
 #include "sphfem/io/ply.h"
 #include "sphfem/io/pvd.h"
+#include "sphfem/io/run_info.h"
 #include "sphfem/io/vtu.h"
 #include "sphfem/scene/bodies.h"
 #include "sphfem/sim/body_frames.h"
+#include "sphfem/sim/checkpoint.h"
 #include "sphfem/sim/metrics.h"
 #include "sphfem/sim/simulation.h"
+#include "sphfem/sim/state.h"
 #include "sphfem/sph/solver.h"
 
 namespace sphfem {
@@ -193,9 +195,30 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
 
   RunSummary sum;
   sum.out_dir = opt.out_dir;
-  const std::string frames_dir = opt.out_dir + "/frames";
+  const std::string frames_dir = io::frames_dir(opt.out_dir);
+  const std::string checkpoint_file = io::checkpoint_path(opt.out_dir);
+  const std::uint64_t identity = scene_identity(scene);
+  // A resumed run reads and checks its checkpoint before it touches any file.
+  Checkpoint resumed;
+  if (opt.resume) {
+    resumed = read_checkpoint(checkpoint_file);
+    if (resumed.scene != identity)
+      throw CheckpointError(checkpoint_file +
+                            ": the checkpoint was written by another scene (or the scene was "
+                            "edited since); resume with the scene that wrote it, or run again "
+                            "without --resume");
+    try {
+      sim.load(resumed.state);
+    } catch (const std::invalid_argument& e) {
+      throw CheckpointError(checkpoint_file + ": " + e.what() + "; run again without --resume");
+    }
+  }
+  const RunCursor& rc = resumed.cursor;
   io::ensure_directory(frames_dir);
-  io::GaugeWriter gauges(opt.out_dir + "/gauges.csv", gauge_columns(scene));
+  io::GaugeWriter gauges =
+      opt.resume ? io::GaugeWriter(io::gauges_path(opt.out_dir), gauge_columns(scene),
+                                   std::size_t(rc.next_frame))
+                 : io::GaugeWriter(io::gauges_path(opt.out_dir), gauge_columns(scene));
   std::unique_ptr<io::PvdCollection> pvd, bodies_pvd, tets_pvd;
   if (scene.output.vtu && solver)
     pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/fluid.pvd");
@@ -203,28 +226,42 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
     bodies_pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/bodies.pvd");
     tets_pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/bodies_tets.pvd");
   }
+  auto frame_file = [](const char* kind, int frame, const char* ext) {
+    char name[64];
+    std::snprintf(name, sizeof name, "%s_%06d%s", kind, frame, ext);
+    return std::string(name);
+  };
+  if (opt.resume) {
+    // The collections list the frames the checkpoint follows; later ones are written again.
+    auto restore = [&](io::PvdCollection* c, const char* kind) {
+      if (!c) return;
+      std::vector<io::PvdCollection::Entry> e;
+      for (std::size_t k = 0; k < rc.frame_times.size(); ++k)
+        e.push_back({rc.frame_times[k], "frames/" + frame_file(kind, int(k), ".vtu"), 0});
+      c->restore(std::move(e));
+    };
+    restore(pvd.get(), "fluid");
+    restore(bodies_pvd.get(), "bodies");
+    restore(tets_pvd.get(), "bodies_tets");
+  }
 
   // What a reader of the folder needs besides the frames (the renderer: radius and tank).
-  nlohmann::json body_names = nlohmann::json::array();
-  for (const BodySpec& b : scene.bodies) body_names.push_back(b.name);
-  nlohmann::json info = {
-      {"scene", scene.path},
-      {"name", scene.name},
-      {"particle_radius", scene.fluid.particle_radius},
-      {"domain",
-       {{"min", {scene.domain.lo.x, scene.domain.lo.y, scene.domain.lo.z}},
-        {"max", {scene.domain.hi.x, scene.domain.hi.y, scene.domain.hi.z}}}},
-      {"solver", scene.simulation.solver == SolverKind::DFSPH ? "dfsph" : "wcsph"},
-      {"backend", opt.backend == Backend::Cuda ? "cuda" : "cpu"},
-      {"fps", scene.output.fps},
-      {"bodies", body_names}};
+  io::RunInfo info;
+  info.scene = scene.path;
+  info.name = scene.name;
+  info.particle_radius = scene.fluid.particle_radius;
+  info.domain_min = scene.domain.lo;
+  info.domain_max = scene.domain.hi;
+  info.solver = scene.simulation.solver == SolverKind::DFSPH ? "dfsph" : "wcsph";
+  info.backend = opt.backend == Backend::Cuda ? "cuda" : "cpu";
+  info.fps = scene.output.fps;
+  for (const BodySpec& b : scene.bodies) info.bodies.push_back(b.name);
   const OutputSpec& o = scene.output;
   const Vec3d eye = o.camera_position - o.camera_target;
+  // A position equal to the target asks for automatic framing: no camera is written then.
   if (dot(eye, eye) > 0)
-    info["camera"] = {{"position", {o.camera_position.x, o.camera_position.y, o.camera_position.z}},
-                      {"target", {o.camera_target.x, o.camera_target.y, o.camera_target.z}},
-                      {"fov", o.camera_fov}};
-  io::write_file_atomic(opt.out_dir + "/run.json", info.dump(2) + "\n");
+    info.camera = io::RunCamera{o.camera_position, o.camera_target, o.camera_fov};
+  io::write_run_info(opt.out_dir, info);
 
   const double frame_dt = 1.0 / scene.output.fps;
   const auto t0 = Clock::now();
@@ -242,6 +279,41 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
   double t = 0, t_frame = 0;
   long steps = 0, steps_since = 0, piter = 0, diter = 0, clamped = 0;
   long crossed_total = 0, inside_max = 0;
+  std::vector<double> frame_times;
+  int frame = 1;
+  if (opt.resume) {
+    t = rc.t;
+    t_frame = rc.t_frame;
+    steps = rc.steps;
+    clamped = rc.clamped;
+    crossed_total = rc.crossed;
+    inside_max = rc.inside_max;
+    last.dt = rc.last_dt;
+    frame_times = rc.frame_times;
+    frame = rc.next_frame;
+    if (meter) meter->set_rotations(rc.energy_rotations);
+    sum.frames = frame;
+  }
+  // Written after the frame that reaches each multiple of checkpoint_every, and at the end.
+  const double every = scene.output.checkpoint_every;
+  double next_checkpoint = every > 0 ? (std::floor(t / every + 1e-9) + 1) * every : 1e300;
+  auto checkpoint = [&] {
+    Checkpoint c;
+    c.scene = identity;
+    c.cursor.next_frame = frame;
+    c.cursor.t = t;
+    c.cursor.t_frame = t_frame;
+    c.cursor.steps = steps;
+    c.cursor.clamped = clamped;
+    c.cursor.crossed = crossed_total;
+    c.cursor.inside_max = inside_max;
+    c.cursor.last_dt = last.dt;
+    c.cursor.frame_times = frame_times;
+    if (meter) c.cursor.energy_rotations = meter->rotations();
+    sim.save(c.state);
+    write_checkpoint(checkpoint_file, c);
+    sum.state_hash = state_hash(c.state);
+  };
 
   auto body_metrics = [&](BodyMetrics& bm) {
     fem->snapshot(body_snap);
@@ -333,6 +405,7 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
     }
     if (hook) hook->reset_stats();
     t_frame = t;
+    frame_times.push_back(t);
     gauges.row(row);
     sim.reset_profile();
     steps_since = piter = diter = 0;
@@ -340,8 +413,7 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
   };
 
   try {
-    write_frame(0);
-    int frame = 1;
+    if (!opt.resume) write_frame(0);
     const double dt_max = scene.simulation.dt_max;
     while (t < duration - 1e-12) {
       const double next = std::min(duration, frame * frame_dt);
@@ -365,6 +437,10 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
       if (t >= next - 1e-9 * std::max(1.0, next)) {
         write_frame(frame);
         ++frame;
+        if (t >= next_checkpoint - 1e-9 * std::max(1.0, t) && t < duration - 1e-12) {
+          checkpoint();
+          next_checkpoint = (std::floor(t / every + 1e-9) + 1) * every;
+        }
       }
       progress.update(t, steps, wall(), false);
     }
@@ -372,6 +448,7 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
     progress.done();
     throw;
   }
+  checkpoint();
   progress.update(t, steps, wall(), true);
   progress.done();
   sum.steps = steps;

@@ -41,9 +41,7 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
 
 double Simulation::time() const { return fluid_ ? fluid_->time() : t_bodies_; }
 
-long Simulation::steps() const {
-  return fluid_ ? fluid_->steps() : bodies_ ? bodies_->steps() : 0;
-}
+long Simulation::steps() const { return fluid_ ? fluid_->steps() : bodies_ ? bodies_->steps() : 0; }
 
 template <class F>
 void Simulation::timed(Stage s, F&& fn) {

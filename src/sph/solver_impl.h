@@ -143,9 +143,8 @@ class SolverT final : public FluidSolver {
   // A fluid alone: the stages in Simulation::step's order, with the hook around the drift.
   StepInfo step(double dt_limit) override {
     StepInfo info;
-    timed(Stage::Neighbors, [&] {
-      sort(hook_ && msamples_ ? hook_->moving_boundary(arrays()) : MovingSurface());
-    });
+    timed(Stage::Neighbors,
+          [&] { sort(hook_ && msamples_ ? hook_->moving_boundary(arrays()) : MovingSurface()); });
     SurfaceProximity near;
     if (hook_) timed(Stage::Proximity, [&] { near = hook_->proximity(arrays()); });
     timed(Stage::Density, [&] { density(near); });
@@ -225,16 +224,16 @@ class SolverT final : public FluidSolver {
   void pressure(StepInfo& info) override {
     const Walls w = walls();
     if (model_.solver == SolverKind::DFSPH) {
-      info.pressure_iterations = solve(view(), grid(start_.data()), w, Real(dt_), pace_, false,
-                                       model_.density_tolerance);
+      info.pressure_iterations =
+          solve(view(), grid(start_.data()), w, Real(dt_), pace_, false, model_.density_tolerance);
       info.density_error = last_error_;
       if (w.moving.n)
-        stages::sample_pressure_impulse(ex_, P_, view(), grid(start_.data()), w.moving,
-                                        Real(dt_), mimp_.data());
+        stages::sample_pressure_impulse(ex_, P_, view(), grid(start_.data()), w.moving, Real(dt_),
+                                        mimp_.data());
     }
     if (w.moving.n && moving_.impulse)
-      stages::node_impulse(ex_, mnodes_, mnode_start_.data(), mnode_sample_.data(),
-                           mnode_w_.data(), mslot_.data(), mimp_.data(), moving_.impulse);
+      stages::node_impulse(ex_, mnodes_, mnode_start_.data(), mnode_sample_.data(), mnode_w_.data(),
+                           mslot_.data(), mimp_.data(), moving_.impulse);
     exec_sync(ex_);
   }
 
@@ -349,8 +348,7 @@ class SolverT final : public FluidSolver {
                                   std::to_string(s.n) + " particles");
     if (s.emitter_travel.size() != travelled_.size())
       throw std::invalid_argument("fluid state: " + std::to_string(s.emitter_travel.size()) +
-                                  " emitters, the model has " +
-                                  std::to_string(travelled_.size()));
+                                  " emitters, the model has " + std::to_string(travelled_.size()));
     n_ = s.n;
     t_ = s.time;
     steps_ = s.steps;
@@ -461,9 +459,8 @@ class SolverT final : public FluidSolver {
           "moving_boundary: the surface is in another memory space than the fluid "
           "solver's; pass the body solver's arrays of the same backend");
     if (moving_.nodes != mnodes_)
-      throw std::runtime_error("moving_boundary: the surface has " +
-                               std::to_string(moving_.nodes) + " nodes, set_moving_samples " +
-                               std::to_string(mnodes_));
+      throw std::runtime_error("moving_boundary: the surface has " + std::to_string(moving_.nodes) +
+                               " nodes, set_moving_samples " + std::to_string(mnodes_));
     const int n = msamples_;
     const GridView g = grid(mstart_.data());
     stages::place_samples(ex_, n, mtri_.data(), mw_.data(), moving_.tri, moving_.x, moving_.v,
@@ -682,8 +679,8 @@ class SolverT final : public FluidSolver {
   bool capacity_warned_ = false;
   StepProfile prof_;
   StepHook* hook_ = nullptr;
-  double dt_ = 0;    // this step's length (time_step)
-  Real pace_ = 1;    // dt_ over the CFL step it shortened
+  double dt_ = 0;  // this step's length (time_step)
+  Real pace_ = 1;  // dt_ over the CFL step it shortened
   static constexpr int kMinSweeps = 2;
 
   // Near-surface density: the hook's proximity of this step, and the half-space integrals.

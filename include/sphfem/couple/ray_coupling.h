@@ -2,11 +2,11 @@
 // (core/profile.h): after the bodies took the fluid's dt, their surface BVH is refit over the
 // step, every particle casts one ray along its motion relative to the surfaces (bodies and,
 // optionally, the tank's faces as static colliders), the drift stops a skin short of the
-// nearest hit (eq. 6), and after the drift the Coupler exchanges impulses per face. An exact test of each particle's actual path
-// against every body face moving linearly over the step finds the particles that met a
-// surface anyway (another face than the nearest one, or a face that turned within the step),
-// puts them a skin in front of it and counts what still meets one (`crossed`), so leakage is
-// measured every step rather than assumed away.
+// nearest hit (eq. 6), and after the drift the Coupler exchanges impulses per face. An exact test
+// of each particle's actual path against every body face moving linearly over the step finds the
+// particles that met a surface anyway (another face than the nearest one, or a face that turned
+// within the step), puts them a skin in front of it and counts what still meets one (`crossed`), so
+// leakage is measured every step rather than assumed away.
 #pragma once
 
 #include <memory>
@@ -53,7 +53,7 @@ struct RayCouplingStats {
   long crossed = 0;    // particles whose displacement crossed a body surface (goal: 0)
   long corrected = 0;  // contacts found after the drift and put back in front of the face
   int rebuilds = 0;
-  long near_surface = 0;  // particle-steps with a body surface within the kernel's support
+  long near_surface = 0;     // particle-steps with a body surface within the kernel's support
   double ms_leak_check = 0;  // the exact test's first pass (a part of contact_fix)
   std::vector<Vec3d> body_impulse;  // N s given to each body by the fluid
 };

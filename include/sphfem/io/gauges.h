@@ -13,6 +13,11 @@ class GaugeWriter {
  public:
   // Truncates `path`; throws std::runtime_error naming the path (and a missing folder).
   GaugeWriter(const std::string& path, std::vector<std::string> columns);
+  // Continues the file at `path` (a resumed run): its header must be these columns and it must
+  // hold at least keep_rows rows; rows after the first keep_rows are dropped (the file is
+  // rewritten atomically first) and new rows are appended. kept_times() gives the first column
+  // of the rows kept. Throws std::runtime_error naming the file and the fix.
+  GaugeWriter(const std::string& path, std::vector<std::string> columns, std::size_t keep_rows);
   ~GaugeWriter();
   GaugeWriter(const GaugeWriter&) = delete;
   GaugeWriter& operator=(const GaugeWriter&) = delete;
@@ -25,12 +30,14 @@ class GaugeWriter {
 
   const std::string& path() const { return path_; }
   const std::vector<std::string>& columns() const { return columns_; }
+  const std::vector<double>& kept_times() const { return kept_times_; }
 
  private:
   void put(const std::string& line);
 
   std::string path_;
   std::vector<std::string> columns_;
+  std::vector<double> kept_times_;
   std::FILE* file_ = nullptr;
 };
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace sphfem::io {
@@ -20,6 +21,10 @@ class PvdCollection {
   // Records a frame and rewrites the whole .pvd atomically, so it is valid after every frame.
   // Several parts (e.g. fluid and boundary) may share one time.
   void add(double time, const std::string& file, int part = 0);
+
+  // Starts from the entries of an earlier run (a resumed one); the file is rewritten with the
+  // next add().
+  void restore(std::vector<Entry> entries) { entries_ = std::move(entries); }
 
   const std::string& path() const { return path_; }
   const std::vector<Entry>& entries() const { return entries_; }

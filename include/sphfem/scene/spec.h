@@ -62,12 +62,13 @@ struct DomainSpec {
 };
 
 struct OutputSpec {
-  double fps = 30.0;       // frames per simulated second
-  bool vtu = true;         // VTK XML unstructured grid frames (ParaView)
-  bool ply = false;        // binary PLY point frames (Houdini, MeshLab)
-  Vec3d camera_position;   // m, where pictures look from; equal to camera_target = automatic
-  Vec3d camera_target;     // m
-  double camera_fov = 40;  // degrees, vertical
+  double fps = 30.0;            // frames per simulated second
+  bool vtu = true;              // VTK XML unstructured grid frames (ParaView)
+  bool ply = false;             // binary PLY point frames (Houdini, MeshLab)
+  Vec3d camera_position;        // m, where pictures look from; equal to camera_target = automatic
+  Vec3d camera_target;          // m
+  double camera_fov = 40;       // degrees, vertical
+  double checkpoint_every = 0;  // s of simulated time; 0 = a checkpoint at the end only
 };
 
 enum class GaugeKind { Pressure, Height, Node };

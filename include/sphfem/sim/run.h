@@ -2,6 +2,7 @@
 // `sphfem run` does.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <string>
 
@@ -16,6 +17,9 @@ struct RunOptions {
   int threads = 0;       // CPU threads, 0 = all cores
   double duration = -1;  // s, overrides simulation.duration when >= 0
   bool progress = true;  // progress line on stderr
+  // Continue from out_dir's checkpoint.bin: frames and gauge rows after it are written again,
+  // those before it kept. Throws CheckpointError for an unusable checkpoint.
+  bool resume = false;
 };
 
 struct RunSummary {
@@ -28,6 +32,7 @@ struct RunSummary {
   long inside_max = 0;  // most particles inside a body at any frame
   double sim_seconds = 0;
   double wall_seconds = 0;
+  std::uint64_t state_hash = 0;  // of the final state (sim/state.h)
 };
 
 // Throws SceneError/std::runtime_error before writing anything when the scene cannot run,

@@ -7,15 +7,15 @@
 #include <vector>
 
 #include "sphfem/collide/collider.h"
+#include "sphfem/core/profile.h"
 #include "sphfem/couple/ray_coupling.h"
 #include "sphfem/fem/model.h"
 #include "sphfem/fem/solver.h"
 #include "sphfem/scene/compile.h"
 #include "sphfem/scene/spec.h"
+#include "sphfem/sim/state.h"
 #include "sphfem/sph/model.h"
 #include "sphfem/sph/solver.h"
-#include "sphfem/sim/state.h"
-#include "sphfem/core/profile.h"
 
 namespace sphfem {
 

@@ -15,8 +15,8 @@ struct FluidState {
   int n = 0;
   double time = 0;
   long steps = 0;
-  std::uint32_t next_id = 0;     // the next emitted particle's id
-  bool capacity_warned = false;  // the "capacity reached" warning was printed
+  std::uint32_t next_id = 0;           // the next emitted particle's id
+  bool capacity_warned = false;        // the "capacity reached" warning was printed
   std::vector<double> emitter_travel;  // per emitter, the nozzle's progress since its last layer
   std::vector<Vec3> x, v;
   std::vector<std::uint32_t> id;
