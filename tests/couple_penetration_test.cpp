@@ -93,7 +93,10 @@ class WallHook : public StepHook {
     return coupler_.travel(hits(), f, {surface()}, skin_, dt);
   }
 
+  // As the coupling's contact_fix and exchange stages do (couple/ray_coupling.h): a particle
+  // that hit ends at least a skin in front of the plane, then the momentum exchange.
   void after_drift(const FluidArrays& f, double) override {
+    coupler_.push_out(hits(), f, {surface()}, skin_);
     const CoupleStats st = coupler_.apply(hits(), f, {surface()});
     contacts_ += st.contacts;
     mem_copy(MemSpace::Host, xs_.data(), f.space, f.x, sizeof(Vec3) * f.n);
@@ -187,7 +190,9 @@ TEST_P(CouplePenetration, NoParticleCrossesAMovingOrStaticWall) {
       "%ld steps, %ld contacts, min gap %.3g m, min clearance along the ray %.4g m "
       "(skin %.4g m), largest shortfall across the wall %.3g m\n",
       sim->steps(), hook.contacts_, hook.min_gap_, hook.min_clearance_, skin, hook.max_deficit_);
-  EXPECT_GT(hook.contacts_, 1000);  // the block did pile up against the wall
+  // The block did pile up against the wall. (Each contact now ends exactly at rest against
+  // the wall, so a resting particle is not hit again and again: 600-1,000 contacts.)
+  EXPECT_GT(hook.contacts_, 500);
   EXPECT_GT(hook.min_gap_, 0.0);
   // Float positions near 0.2 m carry ~1e-8 m of round-off per operation; 1e-6 m is 1/1000 of
   // the skin.

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/node_sums.h"
+#include "couple/contact_solve.h"
 #include "couple/stages.h"
 #include "sphfem/core/memory.h"
 #include "sphfem/couple/coupler.h"
@@ -25,7 +25,10 @@ class CouplerT final : public Coupler {
     keys_ = Buffer<std::uint32_t>(s);
     vals_ = Buffer<std::uint32_t>(s);
     first_ = Buffer<std::uint32_t>(s);
-    runs_ = Buffer<couple::RunResult>(s);
+    contacts_ = Buffer<couple::Contact>(s);
+    slot_ = Buffer<std::uint32_t>(s);
+    for (Buffer<Real>* b : {&mass_, &diag_}) *b = Buffer<Real>(s);
+    for (Buffer<Vec3>* b : {&x_, &r_, &z_, &p_, &q_}) *b = Buffer<Vec3>(s);
     travel_ = Buffer<Real>(s);
     surface_v_ = Buffer<Vec3>(s);
     body_first_ = Buffer<int>(s);
@@ -67,7 +70,7 @@ class CouplerT final : public Coupler {
     const couple::HitView h = hit_view(hits);
     const couple::ParticleView p = particles(fluid);
 
-    // Compact the hits into pairs, in particle order (so the sums below are deterministic).
+    // One contact per particle with a hit, in particle order.
     grow(flag_, n);
     const int bad = couple::flag_hits(ex_, h, n, S.faces, flag_.data());
     if (bad > 0)
@@ -78,43 +81,110 @@ class CouplerT final : public Coupler {
     const int m = int(exclusive_scan(ex_, flag_.data(), flag_.data(), n));
     stats.contacts = m;
     if (m == 0) return stats;
-    grow(keys_, m);
-    grow(vals_, m);
-    couple::make_pairs(ex_, S, h, p, flag_.data(), keys_.data(), vals_.data());
+    grow(contacts_, m);
+    couple::Contact* c = contacts_.data();
+    couple::contact_setup(ex_, S, h, p, flag_.data(), c);
 
-    // Group by (face, side): radix sort, run heads, their scan and the run starts.
-    sort_pairs(ex_, keys_.data(), vals_.data(), m, key_bits(2 * S.faces));
-    couple::run_heads(ex_, keys_.data(), m, flag_.data());
-    const int runs = int(exclusive_scan(ex_, flag_.data(), flag_.data(), m));
-    grow(first_, runs + 1);
-    couple::run_starts(ex_, keys_.data(), flag_.data(), m, runs, first_.data());
+    // The node list: (node, 3 c + corner) sorted by node, one run per node.
+    const int e = 3 * m;
+    for (Buffer<std::uint32_t>* b : {&keys_, &vals_, &flag_, &slot_}) grow(*b, e);
+    couple::node_entries(ex_, c, m, S.nodes, keys_.data(), vals_.data());
+    sort_pairs(ex_, keys_.data(), vals_.data(), e, key_bits(S.nodes + 1));
+    const std::uint32_t* keys = keys_.data();
+    const std::uint32_t none = std::uint32_t(S.nodes);  // entries of immovable nodes sort last
+    const int entries =
+        int(reduce_sum(ex_, e,
+                       [=] SPHFEM_LAMBDA(int i) -> double { return keys[i] < none ? 1.0 : 0.0; }) +
+            0.5);
+    int runs = 0;
+    if (entries > 0) {
+      couple::run_heads(ex_, keys_.data(), entries, flag_.data());
+      runs = int(exclusive_scan(ex_, flag_.data(), flag_.data(), entries));
+      grow(first_, runs + 1);
+      couple::run_starts(ex_, keys_.data(), vals_.data(), flag_.data(), entries, runs,
+                         first_.data(), slot_.data());
+      for (Buffer<Real>* b : {&mass_, &diag_}) grow(*b, runs);
+      for (Buffer<Vec3>* b : {&x_, &r_, &z_, &p_, &q_}) grow(*b, runs);
+    }
 
-    grow(runs_, runs);
-    couple::exchange(ex_, S, h, p, keys_.data(), vals_.data(), first_.data(), runs, runs_.data());
-    // +J into each set's nodes, node by node in run order.
-    const couple::RunResult* res = runs_.data();
-    for (int set = 0; set < S.count; ++set) {
-      if (!S.set[set].impulse) continue;
-      node_sums_.add(
-          ex_, 3 * runs, surfaces[std::size_t(set)].nodes,
-          [=] SPHFEM_LAMBDA(int k, int& node, Vec3& value) {
-            const couple::RunResult& r = res[k / 3];
-            if (r.set != set) return;
-            node = r.node[k % 3];
-            value = r.node_impulse[k % 3];
-          },
-          S.set[set].impulse);
+    // Active set: the approaching contacts first; then those that would pull leave it and
+    // those pushed into approach join it, until it stays the same.
+    const Real mp = fluid.mass, inv_mp = Real(1) / fluid.mass;
+    const Real fastest =
+        reduce_max(ex_, m, Real(0), [=] SPHFEM_LAMBDA(int k) -> Real { return norm(c[k].u0); });
+    const Real tol = std::max(Real(kTolerance) * fastest, Real(1e-9));
+    Vec3* dV = x_.data();
+    for (int round = 0; round < kMaxRounds; ++round) {
+      couple::contact_rhs(ex_, c, m, mp);
+      if (runs > 0) {
+        couple::node_diagonal(ex_, c, vals_.data(), first_.data(), runs, mp, mass_.data(),
+                              diag_.data());
+        stats.iterations += solve_nodes(c, m, runs, mp);
+      }
+      couple::contact_apply(ex_, c, m, slot_.data(), dV, mp);
+      ++stats.rounds;
+      if (couple::contact_update(ex_, c, m, slot_.data(), dV, inv_mp, tol) == 0) break;
+    }
+    stats.residual =
+        double(couple::contact_residual(ex_, c, m, slot_.data(), runs > 0 ? dV : nullptr, inv_mp));
+    couple::apply_to_particles(ex_, c, m, fluid.v, inv_mp);
+    if (runs > 0) {
+      couple::node_gather(ex_, c, vals_.data(), first_.data(), runs, couple::kImpulse, nullptr,
+                          nullptr, r_.data());
+      couple::apply_to_nodes(ex_, S, keys_.data(), first_.data(), runs, r_.data());
     }
     exec_sync(ex_);
 
-    host_runs_.resize(std::size_t(runs));
-    runs_.download(host_runs_.data(), std::size_t(runs));
-    for (const couple::RunResult& r : host_runs_) {
-      stats.faces += r.new_face;
-      stats.exchanges += r.exchanged;
-      stats.body_impulse[std::size_t(r.body)] += Vec3d(r.impulse);
+    host_contacts_.resize(std::size_t(m));
+    contacts_.download(host_contacts_.data(), std::size_t(m));
+    std::vector<char> seen(std::size_t(S.faces), 0);
+    for (const couple::Contact& k : host_contacts_) {
+      if (!seen[std::size_t(k.face)]) ++stats.faces;
+      seen[std::size_t(k.face)] = 1;
+      const bool some = k.J.x != Real(0) || k.J.y != Real(0) || k.J.z != Real(0);
+      stats.exchanges += some ? 1 : 0;
+      stats.body_impulse[std::size_t(k.body)] += Vec3d(k.J);
     }
     return stats;
+  }
+
+  // Preconditioned CG on (M + m_p W P W^T) dV = m_p W P (u* - u0) over the node runs, from
+  // dV = 0, to kCgTolerance of the right-hand side in the preconditioner's norm. Returns its
+  // iterations; the solution is in x_. (Public: nvcc allows no device lambda in private
+  // member functions.)
+  int solve_nodes(couple::Contact* c, int m, int runs, Real mp) {
+    const std::uint32_t *vals = vals_.data(), *first = first_.data(), *slot = slot_.data();
+    Vec3 *x = x_.data(), *r = r_.data(), *z = z_.data(), *p = p_.data(), *q = q_.data();
+    const Real *mass = mass_.data(), *diag = diag_.data();
+    couple::node_gather(ex_, c, vals, first, runs, couple::kRhs, mass, nullptr, r);
+    parallel_for(ex_, runs, [=] SPHFEM_LAMBDA(int k) {
+      x[k] = Vec3();
+      z[k] = r[k] / diag[k];
+      p[k] = z[k];
+    });
+    double rz = reduce_sum(ex_, runs,
+                           [=] SPHFEM_LAMBDA(int k) -> double { return double(dot(r[k], z[k])); });
+    const double target = kCgTolerance * kCgTolerance * rz;
+    int it = 0;
+    while (rz > target && rz > 0 && it < kMaxCg) {
+      couple::contact_apply(ex_, c, m, slot, p, mp);
+      couple::node_gather(ex_, c, vals, first, runs, couple::kMatrix, mass, p, q);
+      const double pq = reduce_sum(
+          ex_, runs, [=] SPHFEM_LAMBDA(int k) -> double { return double(dot(p[k], q[k])); });
+      if (!(pq > 0)) break;
+      const Real alpha = Real(rz / pq);
+      const double rz_new = reduce_sum(ex_, runs, [=] SPHFEM_LAMBDA(int k) -> double {
+        x[k] += p[k] * alpha;
+        r[k] -= q[k] * alpha;
+        z[k] = r[k] / diag[k];
+        return double(dot(r[k], z[k]));
+      });
+      const Real beta = Real(rz_new / rz);
+      parallel_for(ex_, runs, [=] SPHFEM_LAMBDA(int k) { p[k] = z[k] + p[k] * beta; });
+      rz = rz_new;
+      ++it;
+    }
+    return it;
   }
 
  private:
@@ -167,7 +237,7 @@ class CouplerT final : public Coupler {
     couple::SurfacesView S;
     std::vector<int> body_first;
     std::vector<ContactCoeffs> coeffs;
-    int face = 0;
+    int face = 0, nodes = 0;
     for (std::size_t k = 0; k < sets.size(); ++k) {
       const CoupleSurface& c = sets[k];
       const std::string where = "Coupler: surface set " + std::to_string(k) + ": ";
@@ -193,6 +263,7 @@ class CouplerT final : public Coupler {
       coeffs.insert(coeffs.end(), c.coeffs.begin(), c.coeffs.end());
       couple::SurfaceView& s = S.set[k];
       s.first = face;
+      s.node_base = nodes;
       s.triangles = c.triangles;
       s.tri = c.tri;
       s.x = c.x;
@@ -201,10 +272,12 @@ class CouplerT final : public Coupler {
       s.pinned = c.pinned;
       s.impulse = c.impulse;
       face += c.triangles;
+      nodes += c.nodes;
     }
     body_first.push_back(face);
     S.count = int(sets.size());
     S.faces = face;
+    S.nodes = nodes;
     S.bodies = int(coeffs.size());
     if (body_first != host_body_first_ || !same(coeffs, host_coeffs_)) {
       host_body_first_ = body_first;
@@ -226,17 +299,25 @@ class CouplerT final : public Coupler {
     return true;
   }
 
+  // The joint solve: contacts meet their laws to this fraction of the fastest approach; the
+  // sweeps stop at kMaxSweeps whatever the residual (reported in CoupleStats).
+  static constexpr double kTolerance = 1e-5;    // of the fastest approach: "pushed in"
+  static constexpr double kCgTolerance = 1e-6;  // relative, in the preconditioner's norm
+  static constexpr int kMaxCg = 500;
+  static constexpr int kMaxRounds = 16;  // active-set changes
+
   Exec ex_;
-  NodeSums<Exec> node_sums_;
-  Buffer<std::uint32_t> flag_, keys_, vals_, first_;
-  Buffer<couple::RunResult> runs_;
+  Buffer<std::uint32_t> flag_, keys_, vals_, first_, slot_;
+  Buffer<couple::Contact> contacts_;
+  Buffer<Real> mass_, diag_;
+  Buffer<Vec3> x_, r_, z_, p_, q_;
   Buffer<Real> travel_;
   Buffer<Vec3> surface_v_;
   Buffer<int> body_first_;
   Buffer<ContactCoeffs> coeffs_;
   std::vector<int> host_body_first_;
   std::vector<ContactCoeffs> host_coeffs_;
-  std::vector<couple::RunResult> host_runs_;
+  std::vector<couple::Contact> host_contacts_;
 };
 
 }  // namespace sphfem

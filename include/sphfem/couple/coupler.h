@@ -75,9 +75,12 @@ CoupleSurface static_surface(MemSpace space, int nodes, const Vec3* x, int trian
                              const Tri* tri, ContactCoeffs coeffs);
 
 struct CoupleStats {
-  int contacts = 0;   // particles with a hit
-  int faces = 0;      // distinct faces hit
-  int exchanges = 0;  // (face, side) groups that were approaching and exchanged an impulse
+  int contacts = 0;     // particles with a hit
+  int faces = 0;        // distinct faces hit
+  int exchanges = 0;    // contacts that exchanged an impulse
+  int rounds = 0;       // active-set rounds of the joint solve
+  int iterations = 0;   // its conjugate-gradient iterations, all rounds
+  double residual = 0;  // m/s, the largest contact's distance from its law at the end
   // Impulse given to each body (N s), the bodies of all sets in order; the particles received
   // the opposite in total.
   std::vector<Vec3d> body_impulse;
@@ -100,10 +103,11 @@ class Coupler {
   virtual void push_out(const HitArrays& hits, const FluidArrays& fluid,
                         const std::vector<CoupleSurface>& surfaces, Real skin) = 0;
 
-  // The momentum exchange: per (face, side of the face) the impulse J of impulse.h; the
-  // particles there get -J by mass share (fluid.v changes), the face's nodes +J by the
-  // barycentric weights of the hit points (added to impulse). Which side a particle is on is
-  // taken from its position against the face's plane, so call it after the drift.
+  // The momentum exchange, every contact of the call solved together (src/couple/
+  // contact_solve.h): each particle with a hit gets -J_c (fluid.v changes), the face's nodes
+  // +J_c by the barycentric weights of its hit (added to impulse), so that every contact meets
+  // its restitution and slip law at once. Which side a particle is on is taken from its
+  // position against the face's plane, so call it after the drift.
   virtual CoupleStats apply(const HitArrays& hits, const FluidArrays& fluid,
                             const std::vector<CoupleSurface>& surfaces) = 0;
 };
