@@ -10,7 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "sph/moving_stages.h"
+#include "sph/fluid_buffers.h"
+#include "sph/moving_samples.h"
+#include "sph/sample_set.h"
 #include "sph/stages.h"
 #include "sphfem/core/memory.h"
 #include "sphfem/sph/solver.h"
@@ -27,31 +29,17 @@ class SolverT final : public FluidSolver {
   explicit SolverT(const FluidModel& m) : model_(m), P_(m.params) {
     const MemSpace s = Exec::kSpace;
     cap_ = std::max<int>(m.capacity, int(m.x0.size()));
-    for (Buffer<Vec3>* b : {&x_, &v_, &a_, &tmp3_}) *b = Buffer<Vec3>(s, cap_);
-    for (Buffer<Real>* b : {&rho_, &p_, &alpha_, &kappa_, &ksum_, &warm_div_, &warm_dens_, &tmpr_})
-      *b = Buffer<Real>(s, cap_);
-    warm_div_.zero();
-    warm_dens_.zero();
-    nb_ = Buffer<int>(s, cap_);
-    full_ = Buffer<int>(s, cap_);
-    // Room for twice a full support's neighbours; a particle compressed beyond that scans the
-    // grid instead (stages::for_fluid_neighbors).
-    nbr_cap_ = std::max(32, 2 * m.params.full_neighbors);
-    nbr_ = Buffer<std::uint32_t>(s, std::size_t(cap_) * std::size_t(nbr_cap_));
-    nbr_n_ = Buffer<int>(s, cap_);
-    for (Buffer<std::uint32_t>* b : {&id_, &tmpu_, &keys_, &perm_})
-      *b = Buffer<std::uint32_t>(s, cap_);
-    start_ = Buffer<std::uint32_t>(s, std::size_t(m.grid.cells()) + 1);
+    fluid_.allocate(s, cap_, m.params.full_neighbors, m.grid.cells());
 
     n_ = int(m.x0.size());
-    x_.upload(m.x0.data(), n_);
-    v_.upload(m.v0.data(), n_);
+    fluid_.x.upload(m.x0.data(), n_);
+    fluid_.v.upload(m.v0.data(), n_);
     std::vector<std::uint32_t> ids(n_);
     for (int i = 0; i < n_; ++i) ids[i] = std::uint32_t(i);
-    id_.upload(ids.data(), n_);
+    fluid_.id.upload(ids.data(), n_);
     next_id_ = std::uint32_t(n_);
 
-    upload_boundary();
+    upload_tank();
     // The space beyond a surface filled like the tank's walls (sph/surface_density.h).
     const double layer = double(P_.spacing) / double(P_.h);
     const double lattice_mass =
@@ -60,8 +48,8 @@ class SolverT final : public FluidSolver {
         half_space_table(P_.kernel, kHalfSpaceSteps, layer, lattice_mass);
     half_ = Buffer<Real>(s, half.size());
     half_.upload(half.data(), half.size());
-    moving_share_ = stages::moving_rest_share(half, half_space_table(P_.kernel, kHalfSpaceSteps),
-                                              kHalfSpaceSteps, layer);
+    moving_.set_rest_share(stages::moving_rest_share(
+        half, half_space_table(P_.kernel, kHalfSpaceSteps), kHalfSpaceSteps, layer));
     for (const EmitterModel& e : m.emitters) {
       discs_.emplace_back(s, e.disc.size());
       discs_.back().upload(e.disc.data(), e.disc.size());
@@ -79,72 +67,15 @@ class SolverT final : public FluidSolver {
 
   void set_moving_samples(const std::vector<SurfaceSample>& samples, const std::vector<Tri>& tris,
                           int nodes) override {
-    const int n = int(samples.size());
-    std::vector<int> tri(n);
-    std::vector<Vec3> w(n);
-    // Gather lists node -> (sample, weight), so the nodes sum their samples' impulses in a
-    // fixed order without atomics.
-    std::vector<int> start(std::size_t(std::max(nodes, 0)) + 1, 0);
-    for (int k = 0; k < n; ++k) {
-      const SurfaceSample& sm = samples[k];
-      if (sm.tri < 0 || sm.tri >= int(tris.size()))
-        throw std::invalid_argument("set_moving_samples: sample " + std::to_string(k) +
-                                    " names triangle " + std::to_string(sm.tri) + " of " +
-                                    std::to_string(tris.size()));
-      tri[k] = sm.tri;
-      w[k] = Vec3(sm.w[0], sm.w[1], sm.w[2]);
-      for (int c = 0; c < 3; ++c) {
-        const int node = tris[sm.tri].v[c];
-        if (node < 0 || node >= nodes)
-          throw std::invalid_argument("set_moving_samples: triangle " + std::to_string(sm.tri) +
-                                      " names node " + std::to_string(node) + " of " +
-                                      std::to_string(nodes));
-        if (sm.w[c] != Real(0)) ++start[node + 1];
-      }
-    }
-    for (int i = 0; i < nodes; ++i) start[i + 1] += start[i];
-    std::vector<int> sample(start.back());
-    std::vector<Real> weight(start.back());
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (int k = 0; k < n; ++k)
-      for (int c = 0; c < 3; ++c) {
-        if (samples[k].w[c] == Real(0)) continue;
-        const int e = fill[tris[samples[k].tri].v[c]]++;
-        sample[e] = k;
-        weight[e] = samples[k].w[c];
-      }
-    const MemSpace s = Exec::kSpace;
-    const std::size_t cap = std::size_t(std::max(n, 1));
-    msamples_ = n;
-    mnodes_ = n ? nodes : 0;
-    mtri_ = Buffer<int>(s, cap);
-    mtri_.upload(tri.data(), n);
-    mw_ = Buffer<Vec3>(s, cap);
-    mw_.upload(w.data(), n);
-    for (Buffer<Vec3>* b : {&mx_, &mv_, &mtmpx_, &mtmpv_, &mimp_}) *b = Buffer<Vec3>(s, cap);
-    for (Buffer<Real>* b :
-         {&mpsi_, &mrest_, &mpw_, &mrho_, &malpha_, &mkappa_, &mksum_, &mwarm_div_, &mwarm_dens_}) {
-      *b = Buffer<Real>(s, cap);
-      b->zero();
-    }
-    mnb_rest_ = Buffer<int>(s, cap);
-    mfull_ = Buffer<int>(s, cap);
-    for (Buffer<std::uint32_t>* b : {&mkeys_, &mperm_, &mslot_}) *b = Buffer<std::uint32_t>(s, cap);
-    mstart_ = Buffer<std::uint32_t>(s, std::size_t(model_.grid.cells()) + 1);
-    mnode_start_ = Buffer<int>(s, start.size());
-    mnode_start_.upload(start.data(), start.size());
-    mnode_sample_ = Buffer<int>(s, std::max<std::size_t>(sample.size(), 1));
-    mnode_sample_.upload(sample.data(), sample.size());
-    mnode_w_ = Buffer<Real>(s, std::max<std::size_t>(weight.size(), 1));
-    mnode_w_.upload(weight.data(), weight.size());
-    mactive_ = 0;
+    moving_.set(samples, tris, nodes, grid(nullptr));
   }
 
   // A fluid alone: the stages in Simulation::step's order, with the hook around the drift.
   StepInfo step(double dt_limit) override {
     StepInfo info;
-    timed(Stage::Neighbors,
-          [&] { sort(hook_ && msamples_ ? hook_->moving_boundary(arrays()) : MovingSurface()); });
+    timed(Stage::Neighbors, [&] {
+      sort(hook_ && moving_.count() ? hook_->moving_boundary(arrays()) : MovingSurface());
+    });
     SurfaceProximity near;
     if (hook_) timed(Stage::Proximity, [&] { near = hook_->proximity(arrays()); });
     timed(Stage::Density, [&] { density(near); });
@@ -162,8 +93,8 @@ class SolverT final : public FluidSolver {
   }
 
   void sort(const MovingSurface& moving) override {
-    place_moving_samples(moving);
-    sort_particles();
+    moving_.place(ex_, P_, moving, key_bits());
+    fluid_.sort(ex_, grid(fluid_.start.data()), n_, key_bits(), model_.solver == SolverKind::DFSPH);
     exec_sync(ex_);
   }
 
@@ -172,14 +103,14 @@ class SolverT final : public FluidSolver {
     const bool dfsph = model_.solver == SolverKind::DFSPH;
     const Walls w = walls();
     FluidView f = view();
-    const GridView g = grid(start_.data());
+    const GridView g = grid(fluid_.start.data());
     stages::density(ex_, P_, f, g, w, dfsph);
     if (dfsph) {
       active_walls_ = stages::wall_density(ex_, P_, f, g, w.fixed);
       if (w.moving.n) active_walls_ += stages::wall_density(ex_, P_, f, g, w.moving);
-      stages::dfsph_smooth_warm(ex_, P_, f, g, w, tmpr_.data());
-      warm_dens_.swap(tmpr_);
-      p_.zero();
+      stages::dfsph_smooth_warm(ex_, P_, f, g, w, fluid_.tmpr.data());
+      fluid_.warm_dens.swap(fluid_.tmpr);
+      fluid_.p.zero();
     }
     exec_sync(ex_);
   }
@@ -197,11 +128,11 @@ class SolverT final : public FluidSolver {
   void divergence(StepInfo& info) override {
     if (model_.solver != SolverKind::DFSPH) return;
     const Walls w = walls();
-    info.divergence_iterations =
-        solve(view(), grid(start_.data()), w, Real(dt_), pace_, true, model_.divergence_tolerance);
+    info.divergence_iterations = solve(view(), grid(fluid_.start.data()), w, Real(dt_), pace_, true,
+                                       model_.divergence_tolerance);
     if (w.moving.n)
-      stages::sample_pressure_impulse(ex_, P_, view(), grid(start_.data()), w.moving, Real(dt_),
-                                      mimp_.data());
+      stages::sample_pressure_impulse(ex_, P_, view(), grid(fluid_.start.data()), w.moving,
+                                      Real(dt_), moving_.impulse());
     exec_sync(ex_);
   }
 
@@ -209,14 +140,15 @@ class SolverT final : public FluidSolver {
     const bool wcsph = model_.solver == SolverKind::WCSPH;
     const Walls w = walls();
     FluidView f = view();
-    const GridView g = grid(start_.data());
+    const GridView g = grid(fluid_.start.data());
     const Real rdt = Real(dt_);
     if (wcsph) {
       stages::wall_pressure(ex_, P_, f, g, w.fixed);
       if (w.moving.n) stages::wall_pressure(ex_, P_, f, g, w.moving);
     }
     stages::accelerations(ex_, P_, f, g, w, wcsph, rdt);
-    if (w.moving.n) stages::sample_force_impulse(ex_, P_, f, g, w.moving, wcsph, rdt, mimp_.data());
+    if (w.moving.n)
+      stages::sample_force_impulse(ex_, P_, f, g, w.moving, wcsph, rdt, moving_.impulse());
     stages::kick(ex_, f, rdt);
     exec_sync(ex_);
   }
@@ -224,16 +156,14 @@ class SolverT final : public FluidSolver {
   void pressure(StepInfo& info) override {
     const Walls w = walls();
     if (model_.solver == SolverKind::DFSPH) {
-      info.pressure_iterations =
-          solve(view(), grid(start_.data()), w, Real(dt_), pace_, false, model_.density_tolerance);
+      info.pressure_iterations = solve(view(), grid(fluid_.start.data()), w, Real(dt_), pace_,
+                                       false, model_.density_tolerance);
       info.density_error = last_error_;
       if (w.moving.n)
-        stages::sample_pressure_impulse(ex_, P_, view(), grid(start_.data()), w.moving, Real(dt_),
-                                        mimp_.data());
+        stages::sample_pressure_impulse(ex_, P_, view(), grid(fluid_.start.data()), w.moving,
+                                        Real(dt_), moving_.impulse());
     }
-    if (w.moving.n && moving_.impulse)
-      stages::node_impulse(ex_, mnodes_, mnode_start_.data(), mnode_sample_.data(), mnode_w_.data(),
-                           mslot_.data(), mimp_.data(), moving_.impulse);
+    moving_.to_nodes(ex_);
     exec_sync(ex_);
   }
 
@@ -254,9 +184,9 @@ class SolverT final : public FluidSolver {
     FluidArrays a;
     a.space = Exec::kSpace;
     a.n = n_;
-    a.x = x_.data();
-    a.v = v_.data();
-    a.id = id_.data();
+    a.x = fluid_.x.data();
+    a.v = fluid_.v.data();
+    a.id = fluid_.id.data();
     a.mass = P_.mass;
     a.radius = P_.spacing / Real(2);
     return a;
@@ -268,25 +198,26 @@ class SolverT final : public FluidSolver {
     if (!surfaces) surfaces = hook_;
     const bool dfsph = model_.solver == SolverKind::DFSPH;
     const int n = n_;
-    const GridView g = grid(start_.data());
-    // perm_[k]: the state index of the k-th particle in cell order.
-    stages::cell_keys(ex_, g, x_.data(), keys_.data(), perm_.data(), n);
-    sort_pairs(ex_, keys_.data(), perm_.data(), n, key_bits());
-    stages::gather(ex_, x_.data(), tmp3_.data(), perm_.data(), n);
-    stages::gather(ex_, v_.data(), a_.data(), perm_.data(), n);
-    stages::cell_starts(ex_, keys_.data(), start_.data(), n, g.cells());
+    const GridView g = grid(fluid_.start.data());
+    // fluid_.perm[k]: the state index of the k-th particle in cell order.
+    stages::cell_keys(ex_, g, fluid_.x.data(), fluid_.keys.data(), fluid_.perm.data(), n);
+    sort_pairs(ex_, fluid_.keys.data(), fluid_.perm.data(), n, key_bits());
+    stages::gather(ex_, fluid_.x.data(), fluid_.tmp3.data(), fluid_.perm.data(), n);
+    stages::gather(ex_, fluid_.v.data(), fluid_.a.data(), fluid_.perm.data(), n);
+    stages::cell_starts(ex_, fluid_.keys.data(), fluid_.start.data(), n, g.cells());
     FluidView f = view();
-    f.x = tmp3_.data();
-    f.v = a_.data();
-    f.p = tmpr_.data();
+    f.x = fluid_.tmp3.data();
+    f.v = fluid_.a.data();
+    f.p = fluid_.tmpr.data();
     f.warm_div = f.warm_dens = nullptr;
     f.gwall = nullptr;
     FluidArrays sorted = arrays();
-    sorted.x = tmp3_.data();
-    sorted.v = a_.data();
+    sorted.x = fluid_.tmp3.data();
+    sorted.v = fluid_.a.data();
     sorted.id = nullptr;
-    place_moving_samples(surfaces && msamples_ ? surfaces->moving_boundary(sorted)
-                                               : MovingSurface());
+    moving_.place(ex_, P_,
+                  surfaces && moving_.count() ? surfaces->moving_boundary(sorted) : MovingSurface(),
+                  key_bits());
     prox_ = surfaces ? surfaces->proximity(sorted) : SurfaceProximity();
     stages::density(ex_, P_, f, g, walls(), /*with_alpha=*/false);
     prox_ = SurfaceProximity();
@@ -294,10 +225,10 @@ class SolverT final : public FluidSolver {
     std::vector<std::uint32_t> perm(n);
     std::vector<Real> rho(n), p(n);
     std::vector<int> nb(n);
-    perm_.download(perm.data(), n);
-    rho_.download(rho.data(), n);
-    nb_.download(nb.data(), n);
-    tmpr_.download(p.data(), n);
+    fluid_.perm.download(perm.data(), n);
+    fluid_.rho.download(rho.data(), n);
+    fluid_.nb.download(nb.data(), n);
+    fluid_.tmpr.download(p.data(), n);
     out.n = n;
     out.x.resize(n);
     out.v.resize(n);
@@ -305,12 +236,12 @@ class SolverT final : public FluidSolver {
     out.p.resize(n);
     out.id.resize(n);
     out.neighbors.resize(n);
-    x_.download(out.x.data(), n);
-    v_.download(out.v.data(), n);
-    id_.download(out.id.data(), n);
+    fluid_.x.download(out.x.data(), n);
+    fluid_.v.download(out.v.data(), n);
+    fluid_.id.download(out.id.data(), n);
     // DFSPH: the pressure of the last solve, in the state's order; WCSPH: the equation of state
     // at the present densities.
-    if (dfsph) p_.download(out.p.data(), n);
+    if (dfsph) fluid_.p.download(out.p.data(), n);
     for (int k = 0; k < n; ++k) {
       out.rho[perm[k]] = rho[k];
       out.neighbors[perm[k]] = nb[k];
@@ -330,11 +261,11 @@ class SolverT final : public FluidSolver {
     s.id.resize(n_);
     s.warm_div.resize(n_);
     s.warm_dens.resize(n_);
-    x_.download(s.x.data(), n_);
-    v_.download(s.v.data(), n_);
-    id_.download(s.id.data(), n_);
-    warm_div_.download(s.warm_div.data(), n_);
-    warm_dens_.download(s.warm_dens.data(), n_);
+    fluid_.x.download(s.x.data(), n_);
+    fluid_.v.download(s.v.data(), n_);
+    fluid_.id.download(s.id.data(), n_);
+    fluid_.warm_div.download(s.warm_div.data(), n_);
+    fluid_.warm_dens.download(s.warm_dens.data(), n_);
   }
 
   void load(const FluidState& s) override {
@@ -355,12 +286,12 @@ class SolverT final : public FluidSolver {
     next_id_ = s.next_id;
     capacity_warned_ = s.capacity_warned;
     travelled_ = s.emitter_travel;
-    x_.upload(s.x.data(), n);
-    v_.upload(s.v.data(), n);
-    id_.upload(s.id.data(), n);
-    warm_div_.upload(s.warm_div.data(), n);
-    warm_dens_.upload(s.warm_dens.data(), n);
-    p_.zero();
+    fluid_.x.upload(s.x.data(), n);
+    fluid_.v.upload(s.v.data(), n);
+    fluid_.id.upload(s.id.data(), n);
+    fluid_.warm_div.upload(s.warm_div.data(), n);
+    fluid_.warm_dens.upload(s.warm_dens.data(), n);
+    fluid_.p.zero();
     exec_sync(ex_);
   }
 
@@ -385,55 +316,10 @@ class SolverT final : public FluidSolver {
     return g;
   }
 
-  BoundaryView boundary() {
-    BoundaryView b;
-    b.n = int(model_.boundary_x.size());
-    b.x = bx_.data();
-    b.psi = bpsi_.data();
-    b.rest = brest_.data();
-    b.nb_rest = bnb_rest_.data();
-    b.pw = bpw_.data();
-    b.rho = brho_.data();
-    b.alpha = balpha_.data();
-    b.full = bfull_.data();
-    b.kappa = bkappa_.data();
-    b.kappa_sum = bksum_.data();
-    b.warm_div = bwarm_div_.data();
-    b.warm_dens = bwarm_dens_.data();
-    b.grid = grid(bstart_.data());
-    if (model_.boundary_x.empty()) b.grid.nx = 0;
-    return b;
-  }
-
-  // Moving samples of this step (n = 0 when none were placed).
-  BoundaryView moving() {
-    BoundaryView b;
-    b.n = mactive_;
-    if (!mactive_) {
-      b.grid.nx = 0;
-      return b;
-    }
-    b.x = mx_.data();
-    b.v = moving_.v ? mv_.data() : nullptr;
-    b.psi = mpsi_.data();
-    b.rest = mrest_.data();
-    b.nb_rest = mnb_rest_.data();
-    b.pw = mpw_.data();
-    b.rho = mrho_.data();
-    b.alpha = malpha_.data();
-    b.full = mfull_.data();
-    b.kappa = mkappa_.data();
-    b.kappa_sum = mksum_.data();
-    b.warm_div = mwarm_div_.data();
-    b.warm_dens = mwarm_dens_.data();
-    b.grid = grid(mstart_.data());
-    return b;
-  }
-
   Walls walls() {
     Walls w;
-    w.fixed = boundary();
-    w.moving = moving();
+    w.fixed = tank();
+    w.moving = moving_.view();
     if (prox_.dist && prox_.normal) {
       w.surface.dist = prox_.dist;
       w.surface.normal = prox_.normal;
@@ -446,114 +332,29 @@ class SolverT final : public FluidSolver {
     return w;
   }
 
-  // Boundary-particle coupling: the samples on the given surface as it is now, sorted into
-  // their own cell grid, with psi and (DFSPH) their walls-alone density; impulses start at 0.
-  void place_moving_samples(const MovingSurface& surface) {
-    mactive_ = 0;
-    moving_ = MovingSurface();
-    if (!msamples_) return;
-    moving_ = surface;
-    if (moving_.nodes == 0 || !moving_.x || !moving_.tri) return;
-    if (moving_.space != Exec::kSpace)
-      throw std::runtime_error(
-          "moving_boundary: the surface is in another memory space than the fluid "
-          "solver's; pass the body solver's arrays of the same backend");
-    if (moving_.nodes != mnodes_)
-      throw std::runtime_error("moving_boundary: the surface has " + std::to_string(moving_.nodes) +
-                               " nodes, set_moving_samples " + std::to_string(mnodes_));
-    const int n = msamples_;
-    const GridView g = grid(mstart_.data());
-    stages::place_samples(ex_, n, mtri_.data(), mw_.data(), moving_.tri, moving_.x, moving_.v,
-                          mtmpx_.data(), moving_.v ? mtmpv_.data() : nullptr);
-    stages::cell_keys(ex_, g, mtmpx_.data(), mkeys_.data(), mperm_.data(), n);
-    sort_pairs(ex_, mkeys_.data(), mperm_.data(), n, key_bits());
-    stages::gather(ex_, mtmpx_.data(), mx_.data(), mperm_.data(), n);
-    if (moving_.v) stages::gather(ex_, mtmpv_.data(), mv_.data(), mperm_.data(), n);
-    stages::invert(ex_, mperm_.data(), mslot_.data(), n);
-    stages::cell_starts(ex_, mkeys_.data(), mstart_.data(), n, g.cells());
-    mactive_ = n;
-    const BoundaryView b = moving();
-    stages::sample_psi(ex_, P_, b, mpsi_.data());
-    stages::wall_rest(ex_, P_, mrest_.data(), mnb_rest_.data(), b, moving_share_);
-    mimp_.zero();
-  }
+  FluidView view() { return fluid_.view(n_); }
 
-  FluidView view() {
-    FluidView f;
-    f.n = n_;
-    f.x = x_.data();
-    f.v = v_.data();
-    f.a = a_.data();
-    f.rho = rho_.data();
-    f.p = p_.data();
-    f.alpha = alpha_.data();
-    f.kappa = kappa_.data();
-    f.kappa_sum = ksum_.data();
-    f.warm_div = warm_div_.data();
-    f.warm_dens = warm_dens_.data();
-    f.full = full_.data();
-    f.gwall = tmp3_.data();  // free between the sort and the next one
-    f.nb = nb_.data();
-    f.id = id_.data();
-    f.nbr = nbr_.data();
-    f.nbr_n = nbr_n_.data();
-    f.nbr_cap = nbr_cap_;
-    return f;
-  }
+  // The tank's samples, sorted into their grid once (upload_tank).
+  BoundaryView tank() { return tank_.view(int(model_.boundary_x.size())); }
 
-  int key_bits() const {
-    int bits = 1;
-    while ((1ll << bits) < model_.grid.cells()) ++bits;
-    return bits;
-  }
+  int key_bits() const { return cell_key_bits(model_.grid.cells()); }
 
-  // Counting the cells by radix sort, then re-ordering particles by cell for locality.
-  void sort_particles() {
-    const GridView g = grid(start_.data());
-    stages::cell_keys(ex_, g, x_.data(), keys_.data(), perm_.data(), n_);
-    sort_pairs(ex_, keys_.data(), perm_.data(), n_, key_bits());
-    stages::gather(ex_, x_.data(), tmp3_.data(), perm_.data(), n_);
-    x_.swap(tmp3_);
-    stages::gather(ex_, v_.data(), tmp3_.data(), perm_.data(), n_);
-    v_.swap(tmp3_);
-    stages::gather(ex_, id_.data(), tmpu_.data(), perm_.data(), n_);
-    id_.swap(tmpu_);
-    stages::gather(ex_, p_.data(), tmpr_.data(), perm_.data(), n_);
-    p_.swap(tmpr_);
-    if (model_.solver == SolverKind::DFSPH) {
-      stages::gather(ex_, warm_div_.data(), tmpr_.data(), perm_.data(), n_);
-      warm_div_.swap(tmpr_);
-      stages::gather(ex_, warm_dens_.data(), tmpr_.data(), perm_.data(), n_);
-      warm_dens_.swap(tmpr_);
-    }
-    stages::cell_starts(ex_, keys_.data(), start_.data(), n_, g.cells());
-  }
-
-  void upload_boundary() {
+  void upload_tank() {
     const MemSpace s = Exec::kSpace;
     const int nb = int(model_.boundary_x.size());
-    bx_ = Buffer<Vec3>(s, std::max(nb, 1));
-    bpsi_ = Buffer<Real>(s, std::max(nb, 1));
-    for (Buffer<Real>* w :
-         {&brest_, &bpw_, &brho_, &balpha_, &bkappa_, &bksum_, &bwarm_div_, &bwarm_dens_}) {
-      *w = Buffer<Real>(s, std::max(nb, 1));
-      w->zero();
-    }
-    bnb_rest_ = Buffer<int>(s, std::max(nb, 1));
-    bfull_ = Buffer<int>(s, std::max(nb, 1));
-    bstart_ = Buffer<std::uint32_t>(s, std::size_t(model_.grid.cells()) + 1);
+    tank_.resize(nb, grid(nullptr));
     Buffer<Vec3> x(s, std::max(nb, 1));
     Buffer<Real> psi(s, std::max(nb, 1));
     Buffer<std::uint32_t> keys(s, std::max(nb, 1)), perm(s, std::max(nb, 1));
     x.upload(model_.boundary_x.data(), nb);
     psi.upload(model_.boundary_psi.data(), nb);
-    const GridView g = grid(bstart_.data());
+    const GridView g = tank_.grid();
     stages::cell_keys(ex_, g, x.data(), keys.data(), perm.data(), nb);
     sort_pairs(ex_, keys.data(), perm.data(), nb, key_bits());
-    stages::gather(ex_, x.data(), bx_.data(), perm.data(), nb);
-    stages::gather(ex_, psi.data(), bpsi_.data(), perm.data(), nb);
-    stages::cell_starts(ex_, keys.data(), bstart_.data(), nb, g.cells());
-    stages::wall_rest(ex_, P_, brest_.data(), bnb_rest_.data(), boundary());
+    stages::gather(ex_, x.data(), tank_.x.data(), perm.data(), nb);
+    stages::gather(ex_, psi.data(), tank_.psi.data(), perm.data(), nb);
+    stages::cell_starts(ex_, keys.data(), tank_.start.data(), nb, g.cells());
+    stages::wall_rest(ex_, P_, tank_.rest.data(), tank_.nb_rest.data(), tank());
     exec_sync(ex_);
   }
 
@@ -654,25 +455,19 @@ class SolverT final : public FluidSolver {
     return buf;
   }
 
+  // The state (save / load): n_, t_, steps_, next_id_, capacity_warned_, travelled_ and the
+  // state buffers of fluid_. The rest is fixed by the model and set_moving_samples (tank_,
+  // moving_'s samples, discs_, half_) or recomputed by every step.
   FluidModel model_;
   SphParams P_;
   Exec ex_;
   int n_ = 0, cap_ = 0;
   double t_ = 0, last_error_ = 0;
   long steps_ = 0;
-  Buffer<Vec3> x_, v_, a_, tmp3_;
-  Buffer<Real> rho_, p_, alpha_, kappa_, ksum_, tmpr_;
-  Buffer<Real> warm_div_, warm_dens_;  // DFSPH warm starts, follow the particles
-  Buffer<int> nb_, full_;
-  Buffer<std::uint32_t> nbr_;  // fluid neighbour lists of the step (FluidView::nbr)
-  Buffer<int> nbr_n_;
-  int nbr_cap_ = 0;
-  Buffer<std::uint32_t> id_, tmpu_, keys_, perm_, start_;
-  Buffer<Vec3> bx_;
-  Buffer<Real> bpsi_, brest_, bpw_, brho_, balpha_, bkappa_, bksum_, bwarm_div_, bwarm_dens_;
-  Buffer<int> bnb_rest_, bfull_;
-  int active_walls_ = 0;  // wall samples with fluid in reach (DFSPH)
-  Buffer<std::uint32_t> bstart_;
+  FluidBuffers fluid_;          // state and scratch, see sph/fluid_buffers.h
+  SampleSet<Exec> tank_;        // the tank's wall samples (upload_tank)
+  MovingSamples<Exec> moving_;  // boundary-particle coupling: samples on a moving surface
+  int active_walls_ = 0;        // wall samples with fluid in reach (DFSPH)
   std::vector<Buffer<Vec3>> discs_;
   std::vector<double> travelled_;
   std::uint32_t next_id_ = 0;
@@ -687,20 +482,6 @@ class SolverT final : public FluidSolver {
   static constexpr int kHalfSpaceSteps = 256;
   SurfaceProximity prox_;
   Buffer<Real> half_;
-
-  // Boundary-particle coupling: per sample (original order) its triangle and weights; per
-  // placed sample (sorted by cell) the wall quantities of BoundaryView and the impulse; the
-  // nodes' gather lists.
-  int msamples_ = 0, mnodes_ = 0, mactive_ = 0;
-  Real moving_share_ = 1;  // DFSPH walls-alone share of a sample (stages::moving_rest_share)
-  MovingSurface moving_;
-  Buffer<int> mtri_;
-  Buffer<Vec3> mw_, mx_, mv_, mtmpx_, mtmpv_, mimp_;
-  Buffer<Real> mpsi_, mrest_, mpw_, mrho_, malpha_, mkappa_, mksum_, mwarm_div_, mwarm_dens_;
-  Buffer<int> mnb_rest_, mfull_;
-  Buffer<std::uint32_t> mkeys_, mperm_, mslot_, mstart_;
-  Buffer<int> mnode_start_, mnode_sample_;
-  Buffer<Real> mnode_w_;
 };
 
 }  // namespace sphfem

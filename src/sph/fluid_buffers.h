@@ -1,0 +1,106 @@
+// The fluid particles' buffers in one memory space: the state a step hands to the next, and
+// the scratch every step recomputes.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+
+#include "sph/stages.h"
+#include "sphfem/core/memory.h"
+
+namespace sphfem {
+
+// Per particle, in the particles' present order (cell order after a sort).
+//
+// State (FluidSolver::save / load): x, v, id and the DFSPH warm starts warm_div, warm_dens;
+// the sort gathers them, emitters append to them.
+//
+// Scratch: everything else, written by a step before it reads it. p is the last solve's
+// pressure, which FluidSolver::snapshot reports; the sort gathers it along, density() zeroes
+// it (DFSPH) or writes it (WCSPH), and load() zeroes it.
+struct FluidBuffers {
+  // State.
+  Buffer<Vec3> x, v;
+  Buffer<std::uint32_t> id;
+  Buffer<Real> warm_div, warm_dens;
+
+  // Scratch of a step.
+  Buffer<Vec3> a;
+  Buffer<Vec3> tmp3;  // the sort's gather target, then FluidView::gwall until the next sort
+  Buffer<Real> rho, p, alpha, kappa, ksum;
+  Buffer<Real> tmpr;  // gather target; the smoothed warm start (dfsph_smooth_warm)
+  Buffer<int> nb, full;
+  Buffer<std::uint32_t> nbr;  // fluid neighbour lists of the step (FluidView::nbr)
+  Buffer<int> nbr_n;
+  int nbr_cap = 0;
+  Buffer<std::uint32_t> tmpu, keys, perm;  // id's gather target; the sort's keys and order
+  Buffer<std::uint32_t> start;             // cell starts of the fluid's grid
+
+  // Room for cap particles on a grid of `cells` cells; the warm starts begin at 0.
+  void allocate(MemSpace s, int cap, int full_neighbors, long long cells) {
+    for (Buffer<Vec3>* b : {&x, &v, &a, &tmp3}) *b = Buffer<Vec3>(s, cap);
+    for (Buffer<Real>* b : {&rho, &p, &alpha, &kappa, &ksum, &warm_div, &warm_dens, &tmpr})
+      *b = Buffer<Real>(s, cap);
+    warm_div.zero();
+    warm_dens.zero();
+    nb = Buffer<int>(s, cap);
+    full = Buffer<int>(s, cap);
+    // Room for twice a full support's neighbours; a particle compressed beyond that scans the
+    // grid instead (stages::for_fluid_neighbors).
+    nbr_cap = std::max(32, 2 * full_neighbors);
+    nbr = Buffer<std::uint32_t>(s, std::size_t(cap) * std::size_t(nbr_cap));
+    nbr_n = Buffer<int>(s, cap);
+    for (Buffer<std::uint32_t>* b : {&id, &tmpu, &keys, &perm}) *b = Buffer<std::uint32_t>(s, cap);
+    start = Buffer<std::uint32_t>(s, std::size_t(cells) + 1);
+  }
+
+  // Re-orders the first n particles by cell for locality (a radix sort of their cell keys in
+  // g): the state follows, with p, the warm starts under DFSPH only; then the cells' ranges.
+  template <class Exec>
+  void sort(Exec& ex, const GridView& g, int n, int key_bits, bool dfsph) {
+    stages::cell_keys(ex, g, x.data(), keys.data(), perm.data(), n);
+    sort_pairs(ex, keys.data(), perm.data(), n, key_bits);
+    stages::gather(ex, x.data(), tmp3.data(), perm.data(), n);
+    x.swap(tmp3);
+    stages::gather(ex, v.data(), tmp3.data(), perm.data(), n);
+    v.swap(tmp3);
+    stages::gather(ex, id.data(), tmpu.data(), perm.data(), n);
+    id.swap(tmpu);
+    stages::gather(ex, p.data(), tmpr.data(), perm.data(), n);
+    p.swap(tmpr);
+    if (dfsph) {
+      stages::gather(ex, warm_div.data(), tmpr.data(), perm.data(), n);
+      warm_div.swap(tmpr);
+      stages::gather(ex, warm_dens.data(), tmpr.data(), perm.data(), n);
+      warm_dens.swap(tmpr);
+    }
+    stages::cell_starts(ex, keys.data(), start.data(), n, g.cells());
+  }
+
+  // The first n particles as the stages see them.
+  stages::FluidView view(int n) {
+    stages::FluidView f;
+    f.n = n;
+    f.x = x.data();
+    f.v = v.data();
+    f.a = a.data();
+    f.rho = rho.data();
+    f.p = p.data();
+    f.alpha = alpha.data();
+    f.kappa = kappa.data();
+    f.kappa_sum = ksum.data();
+    f.warm_div = warm_div.data();
+    f.warm_dens = warm_dens.data();
+    f.full = full.data();
+    f.gwall = tmp3.data();  // free between the sort and the next one
+    f.nb = nb.data();
+    f.id = id.data();
+    f.nbr = nbr.data();
+    f.nbr_n = nbr_n.data();
+    f.nbr_cap = nbr_cap;
+    return f;
+  }
+};
+
+}  // namespace sphfem
