@@ -15,8 +15,8 @@ struct BenchOptions {
   bool fem = false;
   std::string mesh;  // --fem: surface to tetrahedralise; empty = the fetched bunny
   bool paper = false;
-  std::string method = "both";  // --paper: raytraced, boundary_particles or both
-  std::string scenes;           // --paper: folder of the paper's scenes (default scenes/paper)
+  std::string method = "all";  // --paper: raytraced, raytraced_paper, boundary_particles, both, all
+  std::string scenes;          // --paper: folder of the paper's scenes (default scenes/paper)
 };
 
 // Measured steps of the FEM benchmark when --steps is not given.

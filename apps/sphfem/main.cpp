@@ -159,8 +159,12 @@ int main(int argc, char** argv) {
   bench->add_flag("--paper", bench_opt.paper,
                   "the paper's Table 1: each scene of scenes/paper with a 64,800-particle block, "
                   "ray-traced vs boundary-particle coupling");
-  bench->add_option("--method", bench_opt.method, "--paper: raytraced, boundary_particles or both")
-      ->check(CLI::IsMember({"raytraced", "boundary_particles", "both"}));
+  bench
+      ->add_option("--method", bench_opt.method,
+                   "--paper: raytraced (with near-surface density), raytraced_paper (without: "
+                   "the paper's exchange alone), boundary_particles, both (raytraced and "
+                   "boundary_particles) or all")
+      ->check(CLI::IsMember({"raytraced", "raytraced_paper", "boundary_particles", "both", "all"}));
   bench->add_option("--scenes", bench_opt.scenes, "--paper: folder of the scenes (scenes/paper)");
   bench->add_flag("--fem", bench_opt.fem,
                   "FEM ms/step for spheres and the bunny at the tetrahedron counts of the paper's "

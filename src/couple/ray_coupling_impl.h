@@ -25,7 +25,7 @@ class RayCouplingT final : public RayCoupling {
     for (Buffer<int>* b : {&face_, &tank_face_}) *b = Buffer<int>(sp);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       *b = Buffer<Real>(sp);
-    for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_}) *b = Buffer<Real>(sp);
+    for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_, &near_slip_}) *b = Buffer<Real>(sp);
     near_face_ = Buffer<int>(sp);
     for (Buffer<Vec3>* b : {&near_n_, &near_vel_, &near_dv_}) *b = Buffer<Vec3>(sp);
     x_pre_ = Buffer<Vec3>(sp);
@@ -39,6 +39,13 @@ class RayCouplingT final : public RayCoupling {
       }
       if (s.body.size() != bodies_->model().bodies.size())
         throw std::invalid_argument("RayCoupling: one ContactCoeffs per body is needed");
+      // Each face's slip coefficient, for the near-surface drag.
+      const std::vector<int>& off = bodies_->model().tri_offset;
+      std::vector<Real> slip(std::size_t(std::max(a.triangles, 1)), Real(1));
+      for (std::size_t b = 0; b + 1 < off.size() && b < s.body.size(); ++b)
+        for (int f = off[b]; f < off[b + 1]; ++f) slip[std::size_t(f)] = s.body[b].slip;
+      face_slip_ = Buffer<Real>(sp, slip.size());
+      face_slip_.upload(slip.data(), slip.size());
     }
     if (s.tank && s.rays) build_tank();
     stats_.body_impulse.assign(s.body.size(), Vec3d());
@@ -80,7 +87,7 @@ class RayCouplingT final : public RayCoupling {
     const int n = f.n;
     grow(n);
     // No refit: the build, and each step's refit over x_old -> x, already bound the bodies
-    // where they are now (they move only inside before_drift).
+    // where they are now (they move only in the fem stage).
     const BodyArrays a = bodies_->arrays();
     int* face = near_face_.data();
     Real *dist = near_dist_.data(), *u = near_u_.data(), *v = near_v_.data();
@@ -94,10 +101,14 @@ class RayCouplingT final : public RayCoupling {
     const Vec3* nv = a.v;
     const Tri* tris = a.surface;
     const Real tiny = Real(1e-6) * set_.support;
+    Real* slip = near_slip_.data();
+    const Real* face_slip = face_slip_.data();
     parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) {
       dv[i] = Vec3();
       nrm[i] = Vec3();
+      slip[i] = Real(1);
       if (face[i] < 0) return;
+      slip[i] = face_slip[face[i]];
       // The normal points from the surface to the particle; a particle inside a body (or on
       // its surface) is pushed out along the outward face normal from the surface itself.
       const Tri t = tris[face[i]];
@@ -118,6 +129,7 @@ class RayCouplingT final : public RayCoupling {
     p.normal = nrm;
     p.velocity = vel;
     p.dv = dv;
+    p.slip = slip;
     return p;
   }
 
@@ -255,7 +267,7 @@ class RayCouplingT final : public RayCoupling {
     for (Buffer<int>* b : {&face_, &tank_face_}) grow_buffer(*b, n);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       grow_buffer(*b, n);
-    for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_}) grow_buffer(*b, n);
+    for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_, &near_slip_}) grow_buffer(*b, n);
     grow_buffer(near_face_, n);
     for (Buffer<Vec3>* b : {&x_pre_, &rel_, &near_n_, &near_vel_, &near_dv_}) grow_buffer(*b, n);
   }
@@ -394,7 +406,8 @@ class RayCouplingT final : public RayCoupling {
   Buffer<Real> t_, u_, v_, len_, tank_t_, tank_u_, tank_v_, tank_len_;
   // Near-surface density: each particle's closest body face this step.
   Buffer<int> near_face_;
-  Buffer<Real> near_dist_, near_u_, near_v_;
+  Buffer<Real> near_dist_, near_u_, near_v_, near_slip_;
+  Buffer<Real> face_slip_;  // per body face, its body's slip coefficient
   Buffer<Vec3> near_n_, near_vel_, near_dv_;
   int near_n_active_ = 0;  // particles proximity() found surfaces for, this step
   NodeSums<Exec> node_sums_;

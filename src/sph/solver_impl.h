@@ -325,6 +325,7 @@ class SolverT final : public FluidSolver {
       w.surface.normal = prox_.normal;
       w.surface.vel = prox_.velocity;
       w.surface.dv = prox_.dv;
+      w.surface.slip = prox_.slip;
     }
     w.surface.half.table = half_.data();
     w.surface.half.n = kHalfSpaceSteps;

@@ -87,8 +87,9 @@ struct BoundaryView {
 struct SurfaceView {
   const Real* dist = nullptr;  // nullptr: no surfaces
   const Vec3* normal = nullptr;
-  const Vec3* vel = nullptr;  // nullptr: at rest
-  Vec3* dv = nullptr;         // nullptr: not recorded; else the surface's pushes are added here
+  const Vec3* vel = nullptr;   // nullptr: at rest
+  Vec3* dv = nullptr;          // nullptr: not recorded; else the surface's pushes are added here
+  const Real* slip = nullptr;  // per particle, its surface's C_s; nullptr: free slip
   HalfSpaceView half;
 };
 
@@ -118,6 +119,8 @@ SPHFEM_HD Vec3 relative_to(const BoundaryView& b, std::uint32_t j, const Vec3& v
 struct NearSurface {
   Real phi = 0, slope = 0, normal2 = 0, q = 0;
   Vec3 n, vs;
+  Real slip = 1;
+  Real phi0 = 0;  // Phi at the surface itself
 };
 
 SPHFEM_HD bool near_surface(const SurfaceView& s, int i, NearSurface& o) {
@@ -130,7 +133,25 @@ SPHFEM_HD bool near_surface(const SurfaceView& s, int i, NearSurface& o) {
   o.q = d * s.half.inv_h;
   o.n = n;
   o.vs = s.vel ? s.vel[i] : Vec3();
+  o.slip = s.slip ? s.slip[i] : Real(1);
+  Real slope0, normal0;
+  s.half.lookup(Real(0), o.phi0, slope0, normal0);
   return true;
+}
+
+// The surface's tangential coupling (its slip coefficient C_s, as in the ray-traced exchange's
+// law u_t+ = C_s u_t): over one step the particle's velocity relative to the surface loses
+// (1 - C_s) of its tangential part, weighted by the share Phi / Phi(0) of the kernel the
+// surface fills (1 at the surface, 0 a support away). As an acceleration for the kick:
+// -(1 - C_s) (Phi / Phi(0)) u_t / dt. It never overshoots (the weight is at most 1), and the
+// opposite impulse goes to the surface with the pressure's (SurfaceProximity::dv).
+SPHFEM_HD Vec3 surface_drag(const NearSurface& s, const Vec3& vi, Real inv_dt) {
+  if (!(s.slip < Real(1)) || !(s.phi0 > Real(0))) return Vec3();
+  const Vec3 rel = vi - s.vs;
+  const Vec3 rel_t = rel - s.n * dot(rel, s.n);
+  Real w = s.phi / s.phi0;
+  w = w > Real(1) ? Real(1) : w;
+  return rel_t * (-(Real(1) - s.slip) * w * inv_dt);
 }
 
 // Neighbours, fluid and wall, of a particle inside the fluid: two thirds of a full lattice
@@ -333,8 +354,9 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
                      });
     NearSurface s;
     if (near_surface(w.surface, i, s)) {
-      const Vec3 push = with_pressure ? surface_pressure(P, s, f.p[i], rhoi)
-                                      : surface_stiffness(P, s, f.warm_dens[i]);
+      const Vec3 push = (with_pressure ? surface_pressure(P, s, f.p[i], rhoi)
+                                       : surface_stiffness(P, s, f.warm_dens[i])) +
+                        surface_drag(s, vi, inv_dt);
       acc += push;
       if (w.surface.dv) w.surface.dv[i] += push * dt;
     }

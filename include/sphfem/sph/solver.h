@@ -75,6 +75,9 @@ struct SurfaceProximity {
   const Vec3* normal = nullptr;
   const Vec3* velocity = nullptr;
   Vec3* dv = nullptr;
+  // The surface's slip coefficient C_s (nullptr: 1, free slip): below 1 the surface drags the
+  // particle's tangential velocity toward its own (stages::surface_drag).
+  const Real* slip = nullptr;
 };
 
 // What a fluid step asks of the solid surfaces around it, at the particles' present positions:
