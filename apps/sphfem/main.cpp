@@ -39,7 +39,7 @@ int cmd_check(const std::string& path) {
   if (s.has_fluid()) {
     const FluidModel m = compile_fluid(s);
     const double cells = double(m.grid.cells());
-    // The buffers of src/sph/solver_impl.h. Per particle: x, v, a, tmp (4 x 12 B); rho, p,
+    // The buffers of src/sph/fluid_buffers.h and sample_set.h. Per particle: x, v, a, tmp (4 x 12 B); rho, p,
     // alpha, kappa, kappa_sum, two warm starts, tmp (8 x 4 B); nb, full, id, tmp, keys, perm
     // (6 x 4 B). Per wall sample: x (12 B), nine reals and two ints (44 B). Per cell 8 B.
     bytes += m.capacity * (4 * 12.0 + 14 * 4.0) + m.boundary_x.size() * 56.0 + cells * 8.0;
