@@ -16,25 +16,14 @@
 #include <thread>
 #include <vector>
 
+#include "cli_harness.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out;
-};
-
-Result cli(const std::string& args) {
-  const std::string cmd = std::string(SPHFEM_CLI) + " " + args + " 2>&1";
-  Result r{0, ""};
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  while (fgets(buf.data(), buf.size(), p)) r.out += buf.data();
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using sphfem::testing_cli::cli;
+using sphfem::testing_cli::Result;
 
 std::string hash_of(const std::string& out) {
   const std::size_t at = out.find("state hash ");

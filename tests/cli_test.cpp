@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "cli_harness.h"
 #include "sphfem/core/vec.h"
 #include "sphfem/io/vtu.h"
 
@@ -16,21 +17,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out;  // stdout and stderr together
-};
-
-Result cli(const std::string& args) {
-  const std::string cmd = std::string(SPHFEM_CLI) + " " + args + " 2>&1";
-  Result r{0, ""};
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  while (fgets(buf.data(), buf.size(), p)) r.out += buf.data();
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using sphfem::testing_cli::cli;
+using sphfem::testing_cli::Result;
 
 std::string last_line(const std::string& s) {
   std::string t = s;

@@ -12,26 +12,14 @@
 #include <string>
 #include <vector>
 
+#include "cli_harness.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out;  // stdout and stderr together
-};
-
-// `env_prefix` (e.g. "env -u DISPLAY") runs before the binary.
-Result cli(const std::string& args, const std::string& env_prefix = "") {
-  const std::string cmd = env_prefix + " " + std::string(SPHFEM_CLI) + " " + args + " 2>&1";
-  Result r{0, ""};
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  while (fgets(buf.data(), buf.size(), p)) r.out += buf.data();
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using sphfem::testing_cli::cli;
+using sphfem::testing_cli::Result;
 
 std::string read_bytes(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
