@@ -143,7 +143,7 @@ TEST_F(Resume, RunKilledMidStepResumesFromItsLastCheckpoint) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   while (!fs::exists(out / "checkpoint.bin") && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  std::this_thread::sleep_for(std::chrono::milliseconds(150));
+  std::this_thread::sleep_for(std::chrono::milliseconds(40));
   kill(pid, SIGKILL);
   int status = 0;
   waitpid(pid, &status, 0);
