@@ -166,13 +166,11 @@ class BodySolverT final : public BodySolver {
     s.time = t_;
     s.steps = steps_;
     s.warm = warm_;
-    for (std::vector<Vec3>* a : {&s.x, &s.v, &s.dv, &s.impulse}) a->resize(n_);
-    s.rotation.resize(ne_);
-    x_.download(s.x.data(), n_);
-    v_.download(s.v.data(), n_);
-    dv_.download(s.dv.data(), n_);
-    impulse_.download(s.impulse.data(), n_);
-    rot_.download(s.rotation.data(), ne_);
+    x_.download(s.x, n_);
+    v_.download(s.v, n_);
+    dv_.download(s.dv, n_);
+    impulse_.download(s.impulse, n_);
+    rot_.download(s.rotation, ne_);
   }
 
   void load(const BodyState& s) override {

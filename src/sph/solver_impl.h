@@ -230,15 +230,12 @@ class SolverT final : public FluidSolver {
     fluid_.nb.download(nb.data(), n);
     fluid_.tmpr.download(p.data(), n);
     out.n = n;
-    out.x.resize(n);
-    out.v.resize(n);
     out.rho.resize(n);
     out.p.resize(n);
-    out.id.resize(n);
     out.neighbors.resize(n);
-    fluid_.x.download(out.x.data(), n);
-    fluid_.v.download(out.v.data(), n);
-    fluid_.id.download(out.id.data(), n);
+    fluid_.x.download(out.x, n);
+    fluid_.v.download(out.v, n);
+    fluid_.id.download(out.id, n);
     // DFSPH: the pressure of the last solve, in the state's order; WCSPH: the equation of state
     // at the present densities.
     if (dfsph) fluid_.p.download(out.p.data(), n);
@@ -256,16 +253,11 @@ class SolverT final : public FluidSolver {
     s.next_id = next_id_;
     s.capacity_warned = capacity_warned_;
     s.emitter_travel = travelled_;
-    s.x.resize(n_);
-    s.v.resize(n_);
-    s.id.resize(n_);
-    s.warm_div.resize(n_);
-    s.warm_dens.resize(n_);
-    fluid_.x.download(s.x.data(), n_);
-    fluid_.v.download(s.v.data(), n_);
-    fluid_.id.download(s.id.data(), n_);
-    fluid_.warm_div.download(s.warm_div.data(), n_);
-    fluid_.warm_dens.download(s.warm_dens.data(), n_);
+    fluid_.x.download(s.x, n_);
+    fluid_.v.download(s.v, n_);
+    fluid_.id.download(s.id, n_);
+    fluid_.warm_div.download(s.warm_div, n_);
+    fluid_.warm_dens.download(s.warm_dens, n_);
   }
 
   void load(const FluidState& s) override {

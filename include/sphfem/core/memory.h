@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <utility>
+#include <vector>
 
 namespace sphfem {
 
@@ -56,6 +57,11 @@ class Buffer {
   }
   void download(T* host, std::size_t n, std::size_t offset = 0) const {
     mem_copy(MemSpace::Host, host, space_, data_ + offset, n * sizeof(T));
+  }
+  // The first n values into a host vector of exactly that length.
+  void download(std::vector<T>& host, std::size_t n) const {
+    host.resize(n);
+    download(host.data(), n);
   }
   T* data() { return data_; }
   const T* data() const { return data_; }
