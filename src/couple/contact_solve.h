@@ -176,7 +176,7 @@ void node_gather(Exec& ex, const Contact* contacts, const std::uint32_t* vals,
 // approach joins it (normal only). Returns the number of changes.
 template <class Exec>
 int contact_update(Exec& ex, Contact* contacts, int m, const std::uint32_t* slot, const Vec3* dV,
-                   Real inv_mp, Real tol) {
+                   Real tol) {
   const double changes = reduce_sum(ex, m, [=] SPHFEM_LAMBDA(int c) -> double {
     Contact& ct = contacts[c];
     ct.J = ct.mode ? ct.s - ct.t : Vec3();

@@ -123,7 +123,7 @@ class CouplerT final : public Coupler {
       }
       couple::contact_apply(ex_, c, m, slot_.data(), dV, mp);
       ++stats.rounds;
-      if (couple::contact_update(ex_, c, m, slot_.data(), dV, inv_mp, tol) == 0) break;
+      if (couple::contact_update(ex_, c, m, slot_.data(), dV, tol) == 0) break;
     }
     stats.residual =
         double(couple::contact_residual(ex_, c, m, slot_.data(), runs > 0 ? dV : nullptr, inv_mp));
