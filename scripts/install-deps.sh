@@ -11,6 +11,8 @@ packages=(
   # Rendering: EGL (headless, surfaceless platform) and OpenGL through Mesa's llvmpipe,
   # libepoxy to load GL entry points, GLFW for `sphfem view`, ffmpeg for MP4 videos.
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev libglfw3-dev ffmpeg
+  # The Python module (pybind11), its tests and the plotting example.
+  python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib
 )
 
 missing=()

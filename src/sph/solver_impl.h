@@ -54,6 +54,7 @@ class SolverT final : public FluidSolver {
       discs_.emplace_back(s, e.disc.size());
       discs_.back().upload(e.disc.data(), e.disc.size());
       travelled_.push_back(0.0);
+      emitter_on_.push_back(1);
     }
   }
 
@@ -64,6 +65,11 @@ class SolverT final : public FluidSolver {
   void reset_profile() override { prof_.clear(); }
   const FluidModel& model() const override { return model_; }
   void set_hook(StepHook* hook) override { hook_ = hook; }
+
+  void set_emitter_enabled(int e, bool enabled) override {
+    emitter_on_.at(emitter_index(e)) = enabled ? 1 : 0;
+  }
+  bool emitter_enabled(int e) const override { return emitter_on_.at(emitter_index(e)) != 0; }
 
   void set_moving_samples(const std::vector<SurfaceSample>& samples, const std::vector<Tri>& tris,
                           int nodes) override {
@@ -419,7 +425,7 @@ class SolverT final : public FluidSolver {
     int emitted = 0;
     for (std::size_t e = 0; e < model_.emitters.size(); ++e) {
       const EmitterModel& em = model_.emitters[e];
-      if (t_ <= em.start || t_ - dt >= em.end) continue;
+      if (!emitter_on_[e] || t_ <= em.start || t_ - dt >= em.end) continue;
       const double active = std::min(t_, double(em.end)) - std::max(t_ - dt, double(em.start));
       travelled_[e] += em.speed * active;
       const int k = int(em.disc.size());
@@ -440,6 +446,14 @@ class SolverT final : public FluidSolver {
       }
     }
     return emitted;
+  }
+
+  std::size_t emitter_index(int e) const {
+    if (e < 0 || std::size_t(e) >= emitter_on_.size())
+      throw std::out_of_range("emitter " + std::to_string(e) + ": the scene has " +
+                              std::to_string(emitter_on_.size()) +
+                              " emitters (fluid.emitters), numbered from 0");
+    return std::size_t(e);
   }
 
   static std::string fmt(double v) {
@@ -463,6 +477,7 @@ class SolverT final : public FluidSolver {
   int active_walls_ = 0;        // wall samples with fluid in reach (DFSPH)
   std::vector<Buffer<Vec3>> discs_;
   std::vector<double> travelled_;
+  std::vector<std::uint8_t> emitter_on_;  // per emitter: a control input, not saved state
   std::uint32_t next_id_ = 0;
   bool capacity_warned_ = false;
   StepProfile prof_;

@@ -45,6 +45,20 @@ class Simulation {
   void save(SimState& out) const;
   void load(const SimState& in);
 
+  // Control between steps (src/sim/simulation_control.cpp). Emitter e (fluid.emitters[e]) on
+  // or off, a valve on its start..end window; throws std::out_of_range for an emitter the
+  // scene lacks (or a scene without fluid).
+  void set_emitter_enabled(int e, bool enabled);
+  bool emitter_enabled(int e) const;
+  // The pinned nodes of scene.bodies[body], as global node indices (BodiesModel order);
+  // throws std::out_of_range for a body the scene lacks.
+  std::vector<int> pinned_nodes(int body) const;
+  // Moves pinned nodes (global indices) to the positions x, e.g. a tool pushing the body: the
+  // free nodes follow through the elastic forces of the next steps. A move is applied at once,
+  // so a large one strains the elements next to it as much; move in steps of a few mm.
+  // Throws std::invalid_argument for sizes that differ or a node out of range or not pinned.
+  void move_pinned(const std::vector<int>& nodes, const std::vector<Vec3d>& x);
+
   const StepProfile& profile() const { return profile_; }
   void reset_profile();
 

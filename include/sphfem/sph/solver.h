@@ -144,6 +144,11 @@ class FluidSolver {
   virtual const StepProfile& profile() const = 0;
   virtual void reset_profile() = 0;
   virtual const FluidModel& model() const = 0;
+  // Emitter e (fluid.emitters[e]) emits within its start..end window only while enabled, as
+  // a valve would; all are enabled at construction. A control input, not part of the saved
+  // state. Both throw std::out_of_range for an emitter the scene does not have.
+  virtual void set_emitter_enabled(int e, bool enabled) = 0;
+  virtual bool emitter_enabled(int e) const = 0;
   // Runs hook inside every step() from now on (nullptr: none); not owned, must outlive its use.
   virtual void set_hook(StepHook* hook) = 0;
   // Boundary-particle coupling: samples (sample_surface) on the triangles tris of a surface
