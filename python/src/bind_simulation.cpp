@@ -32,7 +32,7 @@ namespace {
 template <class T>
 py::array_t<T> view(const T* data, std::vector<py::ssize_t> shape, py::handle owner) {
   py::array_t<T> a(shape, data, owner);
-  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  a.attr("setflags")(py::arg("write") = false);
   return a;
 }
 
