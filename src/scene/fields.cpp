@@ -330,7 +330,8 @@ const ObjectTable& fluid_table() {
           .integer("max_particles", &FluidSpec::max_particles, "-", kNonNegative,
                    "Particle capacity reserved for emitters; 0 estimates it from the emitters.")
           .array("blocks", &FluidSpec::blocks, block_table(),
-                 "Initial fluid boxes; see `fluid.blocks[]`.")
+                 "Initial fluid boxes; lattice points inside a body or within a particle radius of "
+                 "its surface are left out. See `fluid.blocks[]`.")
           .array("emitters", &FluidSpec::emitters, emitter_table(),
                  "Inflow nozzles; see `fluid.emitters[]`.")
           .build();

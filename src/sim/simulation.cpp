@@ -14,13 +14,14 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
   if (!scene.has_fluid() && scene.bodies.empty())
     throw std::runtime_error(
         "the scene has nothing to simulate; add fluid.blocks, fluid.emitters or bodies");
-  if (scene.has_fluid()) {
-    fluid_model_ = compile_fluid(scene);
-    fluid_ = make_fluid_solver(fluid_model_, backend);
-  }
+  if (scene.has_fluid()) fluid_model_ = compile_fluid(scene);
   if (!scene.bodies.empty()) {
     bodies_model_ = compile_scene_bodies(scene);
     bodies_ = make_body_solver(bodies_model_, backend);
+  }
+  if (scene.has_fluid()) {
+    if (bodies_) carved_ = carve_bodies(fluid_model_, bodies_model_);
+    fluid_ = make_fluid_solver(fluid_model_, backend);
   }
   // The coupling's stages run whenever fluid meets a surface: bodies (either coupling), or
   // the tank's faces in the ray cast even in a scene without bodies.
@@ -37,6 +38,29 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
                                  bodies_model_.surface, bodies_model_.nodes);
   }
   if (fluid_ && bodies_) inside_check_ = make_collider(Backend::Cpu);
+}
+
+// A fluid block overlapping a body would start with particles inside it or pressed into its
+// surface, which the first steps shoot out at many metres per second; the body displaces
+// them instead. Kept: particles outside every body at least a particle radius from it.
+long carve_bodies(FluidModel& fluid, const BodiesModel& bodies) {
+  if (fluid.x0.empty() || bodies.surface.empty()) return 0;
+  auto collider = make_collider(Backend::Cpu);
+  collider->build(bodies.x0, bodies.surface);
+  const std::vector<std::uint8_t> in = collider->inside(fluid.x0);
+  const std::vector<collide::ClosestHit> near =
+      collider->closest(fluid.x0, fluid.params.spacing / 2);
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < fluid.x0.size(); ++i) {
+    if (in[i] || near[i].face >= 0) continue;
+    fluid.x0[kept] = fluid.x0[i];
+    fluid.v0[kept] = fluid.v0[i];
+    ++kept;
+  }
+  const long removed = long(fluid.x0.size() - kept);
+  fluid.x0.resize(kept);
+  fluid.v0.resize(kept);
+  return removed;
 }
 
 double Simulation::time() const { return fluid_ ? fluid_->time() : t_bodies_; }

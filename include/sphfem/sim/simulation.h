@@ -72,6 +72,8 @@ class Simulation {
   BodySolver* bodies() { return bodies_.get(); }
   RayCoupling* coupling() { return coupling_.get(); }
   const FluidModel& fluid_model() const { return fluid_model_; }
+  // Initial particles left out because they lay inside a body or against its surface.
+  long carved_particles() const { return carved_; }
   const BodiesModel& bodies_model() const { return bodies_model_; }
 
  private:
@@ -88,6 +90,11 @@ class Simulation {
   std::unique_ptr<Collider> inside_check_;
   StepProfile profile_;
   double t_bodies_ = 0;  // without fluid
+  long carved_ = 0;
 };
+
+// Removes the initial particles inside a body's rest surface or closer to it than a particle
+// radius; returns how many.
+long carve_bodies(FluidModel& fluid, const BodiesModel& bodies);
 
 }  // namespace sphfem
