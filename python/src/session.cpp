@@ -88,7 +88,12 @@ std::vector<std::string> Session::write_frame(const std::string& out_dir) {
   const SceneSpec& scene = sim_->scene();
   const std::string dir = io::frames_dir(out_dir);
   io::ensure_directory(dir);
-  if (written_ == 0) {
+  if (out_dir != out_dir_ || !pvd_[0]) {
+    out_dir_ = out_dir;
+    written_ = 0;
+    int k = 0;
+    for (const char* kind : {"fluid", "bodies", "bodies_tets"})
+      pvd_[k++] = std::make_unique<io::PvdCollection>(out_dir + "/" + kind + ".pvd");
     io::RunInfo info;
     info.scene = scene.path;
     info.name = scene.name;
@@ -103,10 +108,16 @@ std::vector<std::string> Session::write_frame(const std::string& out_dir) {
   char num[16];
   std::snprintf(num, sizeof num, "_%06d", written_);
   std::vector<std::string> files;
+  const double t = sim_->time();
+  auto vtu = [&](int k, const char* kind, const io::PointSet& ps) {
+    const std::string name = std::string(kind) + num + ".vtu";
+    files.push_back(dir + "/" + name);
+    io::write_vtu(files.back(), ps);
+    pvd_[k]->add(t, "frames/" + name);
+  };
   if (sim_->fluid()) {
     const io::PointSet ps = fluid_frame(*fluid());
-    files.push_back(dir + "/fluid" + num + ".vtu");
-    io::write_vtu(files.back(), ps);
+    vtu(0, "fluid", ps);
     if (scene.output.ply) {
       files.push_back(dir + "/fluid" + num + ".ply");
       io::write_ply(files.back(), ps);
@@ -114,10 +125,8 @@ std::vector<std::string> Session::write_frame(const std::string& out_dir) {
   }
   if (body_frames_) {
     const BodySnapshot b = bodies();
-    files.push_back(dir + "/bodies" + num + ".vtu");
-    io::write_vtu(files.back(), body_frames_->surface(b));
-    files.push_back(dir + "/bodies_tets" + num + ".vtu");
-    io::write_vtu(files.back(), body_frames_->tets(b));
+    vtu(1, "bodies", body_frames_->surface(b));
+    vtu(2, "bodies_tets", body_frames_->tets(b));
   }
   ++written_;
   return files;

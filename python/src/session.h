@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "sphfem/io/pvd.h"
 #include "sphfem/sim/body_frames.h"
 #include "sphfem/sim/gauge_series.h"
 #include "sphfem/sim/simulation.h"
@@ -29,8 +30,9 @@ class Session {
   std::shared_ptr<const FluidSnapshot> fluid();
   BodySnapshot bodies();
 
-  // frames/<kind>_NNNNNN.{vtu,ply} of the present state in out_dir (and run.json, so that
-  // `sphfem render` draws them), numbered from 0 by the calls; returns the files written.
+  // frames/<kind>_NNNNNN.{vtu,ply} of the present state in out_dir, with the .pvd collections
+  // and run.json that `sphfem render` and ParaView read; numbered from 0 by the calls for one
+  // folder (a call for another folder starts again from 0). Returns the files written.
   std::vector<std::string> write_frame(const std::string& out_dir);
 
   // The state as a checkpoint file (sim/checkpoint.h), and back; load() throws CheckpointError
@@ -54,9 +56,12 @@ class Session {
   std::unique_ptr<GaugeSeries> gauges_;
   std::unique_ptr<BodyFrames> body_frames_;
   double frame_dt_ = 0;
-  int frame_ = 1;     // the next frame of the clock (frame 0 is the start)
-  int written_ = 0;   // frames written by write_frame
-  long version_ = 0;  // of the state, for the snapshot cache
+  int frame_ = 1;  // the next frame of the clock (frame 0 is the start)
+  // write_frame's folder, its frames so far and their collections.
+  std::string out_dir_;
+  int written_ = 0;
+  std::unique_ptr<io::PvdCollection> pvd_[3];  // fluid, bodies, bodies_tets
+  long version_ = 0;                           // of the state, for the snapshot cache
   long snap_version_ = -1;
   std::shared_ptr<FluidSnapshot> snap_;
 };

@@ -176,6 +176,8 @@ def test_write_frame_writes_what_the_cli_writes(cup, tmp_path):
     assert names == ["bodies_000001.vtu", "bodies_tets_000001.vtu", "fluid_000001.ply",
                      "fluid_000001.vtu"]
     assert len(first) == 4 and (tmp_path / "run.json").exists()
+    for kind in ["fluid", "bodies", "bodies_tets"]:
+        assert (tmp_path / f"{kind}.pvd").read_text().count("<DataSet") == 2
     frame = read_ply(tmp_path / "frames/fluid_000001.ply")
     np.testing.assert_array_equal(frame["x"], sim.positions[:, 0])
 
