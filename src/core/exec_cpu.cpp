@@ -48,6 +48,13 @@ namespace {
 int g_threads = 0;
 }
 
+namespace {
+thread_local const char* g_stage_label = nullptr;
+}  // namespace
+
+void set_stage_label(const char* label) { g_stage_label = label; }
+const char* stage_label() { return g_stage_label; }
+
 void set_cpu_threads(int n) {
   g_threads = n;
   omp_set_num_threads(n > 0 ? n : omp_get_num_procs());

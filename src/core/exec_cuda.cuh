@@ -13,7 +13,11 @@
 
 namespace sphfem {
 
-void cuda_check(cudaError_t e, const char* what);
+// Throws std::runtime_error naming `what`, the stage running (set_stage_label) and, when
+// given, the source line of the launch.
+void cuda_check(cudaError_t e, const char* what, const char* file = nullptr, int line = 0);
+// SPHFEM_CUDA_CHECK=1: synchronise after every launch (read once).
+bool cuda_sync_checks();
 
 struct CudaExec {
   static constexpr MemSpace kSpace = MemSpace::Device;
@@ -36,12 +40,16 @@ __global__ void parallel_for_kernel(int n, F f) {
   if (i < n) f(i);
 }
 
+// The launch site is the caller's line (GCC's and Clang's __builtin_FILE/__builtin_LINE as
+// default arguments), which names the kernel in an error.
 template <class F>
-void parallel_for(CudaExec& ex, int n, F f) {
+void parallel_for(CudaExec& ex, int n, F f, const char* file = __builtin_FILE(),
+                  int line = __builtin_LINE()) {
   if (n <= 0) return;
   constexpr int kBlock = 256;
   parallel_for_kernel<<<(n + kBlock - 1) / kBlock, kBlock, 0, ex.stream>>>(n, f);
-  cuda_check(cudaGetLastError(), "kernel launch");
+  cuda_check(cudaGetLastError(), "kernel launch", file, line);
+  if (cuda_sync_checks()) cuda_check(cudaStreamSynchronize(ex.stream), "kernel", file, line);
 }
 
 template <class T, class F>
@@ -51,8 +59,8 @@ T reduce_max(CudaExec& ex, int n, T init, F f) {
   parallel_for(ex, n, [=] __device__(int i) { vals[i] = f(i); });
   T* out = vals + n;
   std::size_t bytes = 0;
-  cub::DeviceReduce::Max(nullptr, bytes, vals, out, n, ex.stream);
-  cub::DeviceReduce::Max(ex.temp(bytes), bytes, vals, out, n, ex.stream);
+  cuda_check(cub::DeviceReduce::Max(nullptr, bytes, vals, out, n, ex.stream), "cub max");
+  cuda_check(cub::DeviceReduce::Max(ex.temp(bytes), bytes, vals, out, n, ex.stream), "cub max");
   T r;
   cuda_check(cudaMemcpyAsync(&r, out, sizeof(T), cudaMemcpyDeviceToHost, ex.stream), "reduce");
   cuda_check(cudaStreamSynchronize(ex.stream), "reduce");
@@ -66,11 +74,10 @@ double reduce_sum(CudaExec& ex, int n, F f) {
   parallel_for(ex, n, [=] __device__(int i) { vals[i] = double(f(i)); });
   double* out = vals + n;
   std::size_t bytes = 0;
-  cub::DeviceReduce::Sum(nullptr, bytes, vals, out, n, ex.stream);
-  cub::DeviceReduce::Sum(ex.temp(bytes), bytes, vals, out, n, ex.stream);
+  cuda_check(cub::DeviceReduce::Sum(nullptr, bytes, vals, out, n, ex.stream), "cub sum");
+  cuda_check(cub::DeviceReduce::Sum(ex.temp(bytes), bytes, vals, out, n, ex.stream), "cub sum");
   double r = 0.0;
-  cuda_check(cudaMemcpyAsync(&r, out, sizeof(double), cudaMemcpyDeviceToHost, ex.stream),
-             "reduce");
+  cuda_check(cudaMemcpyAsync(&r, out, sizeof(double), cudaMemcpyDeviceToHost, ex.stream), "reduce");
   cuda_check(cudaStreamSynchronize(ex.stream), "reduce");
   return r;
 }

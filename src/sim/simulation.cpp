@@ -70,7 +70,9 @@ long Simulation::steps() const { return fluid_ ? fluid_->steps() : bodies_ ? bod
 template <class F>
 void Simulation::timed(Stage s, F&& fn) {
   const auto t0 = std::chrono::steady_clock::now();
+  set_stage_label(stage_name(s));
   fn();
+  set_stage_label(nullptr);
   profile_.ms[int(s)] +=
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }

@@ -11,6 +11,13 @@ enum class Backend { Cpu, Cuda };
 // what is missing.
 bool cuda_available(std::string* why);
 
+// The stage a GPU error is reported in: Simulation names each stage of a step while it runs
+// (nullptr outside one). Kernel faults surface at a later synchronisation; with
+// SPHFEM_CUDA_CHECK=1 in the environment every launch is synchronised and checked, so the
+// error names the stage and the source line that launched the failing kernel.
+void set_stage_label(const char* label);
+const char* stage_label();
+
 // Number of CPU threads the CPU backend uses; 0 = all cores.
 void set_cpu_threads(int n);
 int cpu_threads();
