@@ -34,11 +34,14 @@ struct FluidBuffers {
   Buffer<std::uint32_t> nbr;  // fluid neighbour lists of the step (FluidView::nbr)
   Buffer<int> nbr_n;
   int nbr_cap = 0;
+  int cap = 0;                             // particles there is room for
+  bool nbr_interleaved = false;            // the layout of nbr (FluidView::nbr_si, view())
   Buffer<std::uint32_t> tmpu, keys, perm;  // id's gather target; the sort's keys and order
   Buffer<std::uint32_t> start;             // cell starts of the fluid's grid
 
   // Room for cap particles on a grid of `cells` cells; the warm starts begin at 0.
-  void allocate(MemSpace s, int cap, int full_neighbors, long long cells) {
+  void allocate(MemSpace s, int capacity, int full_neighbors, long long cells) {
+    cap = capacity;
     for (Buffer<Vec3>* b : {&x, &v, &a, &tmp3}) *b = Buffer<Vec3>(s, cap);
     for (Buffer<Real>* b : {&rho, &p, &alpha, &kappa, &ksum, &warm_div, &warm_dens, &tmpr})
       *b = Buffer<Real>(s, cap);
@@ -50,6 +53,10 @@ struct FluidBuffers {
     // grid instead (stages::for_fluid_neighbors).
     nbr_cap = std::max(32, 2 * full_neighbors);
     nbr = Buffer<std::uint32_t>(s, std::size_t(cap) * std::size_t(nbr_cap));
+    // A device reads the lists interleaved, entry k of particle i at k * cap + i, so the
+    // threads of a warp read consecutive words; the host keeps each list contiguous (one or
+    // two cache lines a particle).
+    nbr_interleaved = s == MemSpace::Device;
     nbr_n = Buffer<int>(s, cap);
     for (Buffer<std::uint32_t>* b : {&id, &tmpu, &keys, &perm}) *b = Buffer<std::uint32_t>(s, cap);
     start = Buffer<std::uint32_t>(s, std::size_t(cells) + 1);
@@ -99,6 +106,8 @@ struct FluidBuffers {
     f.nbr = nbr.data();
     f.nbr_n = nbr_n.data();
     f.nbr_cap = nbr_cap;
+    f.nbr_si = nbr_interleaved ? 1 : std::size_t(nbr_cap);
+    f.nbr_sk = nbr_interleaved ? std::size_t(cap) : 1;
     return f;
   }
 };

@@ -11,8 +11,10 @@
 // missing beyond it (near-surface density, sph/surface_density.h).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
+#include "sphfem/core/memory.h"
 #include "sphfem/sph/grid.h"
 #include "sphfem/sph/model.h"
 #include "sphfem/sph/surface_density.h"
@@ -36,11 +38,15 @@ struct FluidView {
   Vec3* gwall = nullptr;      // DFSPH: sum_b V grad W_ib (density), read by wall_density
   std::uint32_t* id = nullptr;
   // Fluid neighbours of each particle as density() found them, kept for the step's later
-  // passes: nbr[i * nbr_cap + k], k < nbr_n[i]; nbr_n[i] = -1 where more than nbr_cap were
-  // found (those particles scan the grid). nbr = nullptr: no list.
+  // passes: the k-th of particle i at nbr[i * nbr_si + k * nbr_sk], k < nbr_n[i]; nbr_n[i] =
+  // -1 where more than nbr_cap were found (those particles scan the grid). nbr = nullptr: no
+  // list. The host lays a particle's list out contiguously (nbr_sk = 1, cache lines), a device
+  // interleaves the lists (nbr_si = 1, coalesced reads of neighbouring threads); see
+  // FluidBuffers::view.
   std::uint32_t* nbr = nullptr;
   int* nbr_n = nullptr;
   int nbr_cap = 0;
+  std::size_t nbr_si = 0, nbr_sk = 0;
 };
 
 // f(j, rij, r2) for each fluid neighbour j of particle i (at xi = f.x[i]), from the list
@@ -56,9 +62,9 @@ SPHFEM_HD void for_fluid_neighbors(const FluidView& f, const GridView& g, int i,
     for_neighbors(g, f.x, xi, h2, fn);
     return;
   }
-  const std::uint32_t* list = f.nbr + std::size_t(i) * std::size_t(f.nbr_cap);
+  const std::uint32_t* list = f.nbr + std::size_t(i) * f.nbr_si;
   for (int k = 0; k < n; ++k) {
-    const std::uint32_t j = list[k];
+    const std::uint32_t j = list[std::size_t(k) * f.nbr_sk];
     const Vec3 rij = xi - f.x[j];
     fn(j, rij, norm2(rij));
   }
@@ -169,17 +175,35 @@ void cell_keys(Exec& ex, const GridView g, const Vec3* x, std::uint32_t* keys, s
   });
 }
 
-// start[c] = first index with key >= c, for sorted keys; start[cells] = n.
+// start[c] = first index with key >= c, for sorted keys < cells (start[cells] = n, and an
+// empty cell starts where the next non-empty one does). Parallel over blocks of cells: a
+// binary search for the block's first cell, then a merge walk through the block's particles.
+// No thread walks a long run of empty cells, as one thread per particle filling the gap
+// before it did (up to 1e5 cells on one GPU thread, with the air above a tank's water). A
+// device takes one cell a thread (the search alone); the host blocks of kHostCellBlock
+// cells, O(cells + n) in all.
+constexpr int kHostCellBlock = 1024;
+
 template <class Exec>
 void cell_starts(Exec& ex, const std::uint32_t* keys, std::uint32_t* start, int n, int cells) {
-  if (n == 0) {
-    parallel_for(ex, cells + 1, [=] SPHFEM_LAMBDA(int c) { start[c] = 0; });
-    return;
-  }
-  parallel_for(ex, n + 1, [=] SPHFEM_LAMBDA(int i) {
-    const std::uint32_t lo = i == 0 ? 0u : keys[i - 1] + 1u;
-    const std::uint32_t hi = i == n ? std::uint32_t(cells) : keys[i];
-    for (std::uint32_t c = lo; c <= hi; ++c) start[c] = std::uint32_t(i);
+  constexpr int B = Exec::kSpace == MemSpace::Device ? 1 : kHostCellBlock;
+  const int total = cells + 1;
+  parallel_for(ex, (total + B - 1) / B, [=] SPHFEM_LAMBDA(int b) {
+    const std::uint32_t c0 = std::uint32_t(b) * std::uint32_t(B);
+    const std::uint32_t c1 = c0 + B < std::uint32_t(total) ? c0 + B : std::uint32_t(total);
+    // lower_bound(keys, keys + n, c0)
+    std::uint32_t lo = 0, hi = std::uint32_t(n);
+    while (lo < hi) {
+      const std::uint32_t mid = lo + (hi - lo) / 2;
+      if (keys[mid] < c0)
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    for (std::uint32_t c = c0; c < c1; ++c) {
+      while (lo < std::uint32_t(n) && keys[lo] < c) ++lo;
+      start[c] = lo;
+    }
   });
 }
 
@@ -206,12 +230,13 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     // Branch-free store into the list (or a scratch slot without one): the last slot takes the
     // overflow, which nbr_n = -1 then marks unused.
     std::uint32_t scratch;
-    std::uint32_t* list = f.nbr ? f.nbr + std::size_t(i) * std::size_t(f.nbr_cap) : &scratch;
+    std::uint32_t* list = f.nbr ? f.nbr + std::size_t(i) * f.nbr_si : &scratch;
+    const std::size_t step = f.nbr ? f.nbr_sk : 0;
     const int last = f.nbr ? f.nbr_cap - 1 : 0;
     for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
       const Real rr = std::sqrt(r2);
       sum += P.kernel.W(rr);
-      list[count < last ? count : last] = j;
+      list[std::size_t(count < last ? count : last) * step] = j;
       ++count;
       if (with_alpha) {
         const Vec3 gw = P.kernel.grad(r, rr) * P.volume;

@@ -1,0 +1,164 @@
+// Cell starts and the per-step neighbour lists against brute force, in both list layouts
+// (the host's contiguous lists and a device's interleaved ones, run here on the host).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+#include <vector>
+
+#include "core/exec_cpu.h"
+#include "sph/fluid_buffers.h"
+#include "sph/stages.h"
+
+using namespace sphfem;
+
+namespace {
+
+// start[c] = number of keys below c, for every c in [0, cells].
+void expect_starts(std::vector<std::uint32_t> keys, int cells, const char* what) {
+  std::sort(keys.begin(), keys.end());
+  CpuExec ex;
+  const int n = int(keys.size());
+  std::vector<std::uint32_t> start(std::size_t(cells) + 1, 0xdeadbeefu);
+  stages::cell_starts(ex, keys.data(), start.data(), n, cells);
+  std::size_t below = 0;
+  for (int c = 0; c <= cells; ++c) {
+    while (below < keys.size() && keys[below] < std::uint32_t(c)) ++below;
+    ASSERT_EQ(start[std::size_t(c)], std::uint32_t(below)) << what << ": cell " << c;
+  }
+  EXPECT_EQ(start[std::size_t(cells)], std::uint32_t(n)) << what;
+}
+
+TEST(SphCells, CellStartsEqualBruteForce) {
+  std::mt19937 rng(7);
+  // Sizes around the host's block of cells, and far more cells than particles.
+  for (int cells : {1, 2, 1023, 1024, 1025, 3000, 100000}) {
+    expect_starts({}, cells, "no particles");
+    for (std::uint32_t c : {0u, std::uint32_t(cells / 2), std::uint32_t(cells - 1)}) {
+      expect_starts({c}, cells, "one particle");
+      expect_starts(std::vector<std::uint32_t>(500, c), cells, "all in one cell");
+    }
+    for (int n : {10, 1000, 50000}) {
+      std::vector<std::uint32_t> keys(static_cast<std::size_t>(n));
+      // Clustered: most cells empty, long empty runs at both ends and between clusters.
+      std::uniform_int_distribution<int> centre(0, cells - 1), off(-20, 20);
+      const int c1 = centre(rng), c2 = centre(rng);
+      for (int i = 0; i < n; ++i) {
+        const int c = (i % 2 ? c1 : c2) + off(rng);
+        keys[std::size_t(i)] = std::uint32_t(std::clamp(c, 0, cells - 1));
+      }
+      expect_starts(keys, cells, "clustered");
+      for (auto& k : keys) k = std::uint32_t(centre(rng));
+      expect_starts(keys, cells, "uniform");
+    }
+  }
+}
+
+// density() stores each particle's fluid neighbours; for_fluid_neighbors must give them back
+// in the grid's order, in either layout, and they must be the brute-force neighbour set.
+void check_lists(int nbr_cap_override) {
+  CpuExec ex;
+  const Real h = Real(0.1), d = Real(0.05);
+  SphParams P;
+  P.kernel = Kernel(0, h);
+  P.h = h;
+  P.h2 = h * h;
+  P.spacing = d;
+  P.rho0 = 1000;
+  P.mass = P.rho0 * d * d * d;
+  P.volume = P.mass / P.rho0;
+  P.stiffness = 1000;
+  P.full_neighbors = 33;
+
+  // A jittered lattice block with a denser corner, inside a larger grid with empty cells.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> jit(-0.2f, 0.2f), u(0.05f, 0.35f);
+  std::vector<Vec3> x;
+  for (int k = 0; k < 10; ++k)
+    for (int j = 0; j < 10; ++j)
+      for (int i = 0; i < 10; ++i)
+        x.push_back(Vec3(Real(0.2) + d * (Real(i) + jit(rng)), Real(0.2) + d * (Real(j) + jit(rng)),
+                         Real(0.2) + d * (Real(k) + jit(rng))));
+  for (int i = 0; i < 60; ++i) x.push_back(Vec3(u(rng), u(rng), u(rng)));
+  const int n = int(x.size());
+
+  GridView g;
+  g.lo = Vec3(0, 0, 0);
+  g.inv_cell = Real(1) / h;
+  g.nx = 12;
+  g.ny = 9;
+  g.nz = 10;
+  const int cap = n + 37;  // the interleaved stride is the capacity, not n
+  FluidBuffers fb;
+  fb.allocate(MemSpace::Host, cap, P.full_neighbors, g.cells());
+  if (nbr_cap_override > 0) fb.nbr_cap = nbr_cap_override;
+  fb.x.upload(x.data(), std::size_t(n));
+  fb.v.zero();
+  fb.id.upload(std::vector<std::uint32_t>(std::size_t(cap), 0u).data(), std::size_t(cap));
+  fb.p.zero();
+  fb.sort(ex, g, n, 11, /*dfsph=*/false);
+  g.start = fb.start.data();
+
+  stages::FluidView host = fb.view(n);
+  ASSERT_EQ(host.nbr_si, std::size_t(fb.nbr_cap));
+  ASSERT_EQ(host.nbr_sk, std::size_t(1));
+  stages::Walls walls;
+  stages::density(ex, P, host, g, walls, /*with_alpha=*/false);
+  // Kept aside: the second run below writes the same buffer in the other layout.
+  std::vector<std::uint32_t> host_list(fb.nbr.data(), fb.nbr.data() + fb.nbr.size());
+  std::vector<int> host_n(fb.nbr_n.data(), fb.nbr_n.data() + n);
+  const std::vector<Real> host_rho(fb.rho.data(), fb.rho.data() + n);
+
+  // A device's layout: entry k of particle i at k * cap + i.
+  stages::FluidView dev = host;
+  dev.nbr_si = 1;
+  dev.nbr_sk = std::size_t(cap);
+  std::fill(fb.nbr.data(), fb.nbr.data() + fb.nbr.size(), 0xffffffffu);
+  stages::density(ex, P, dev, g, walls, /*with_alpha=*/false);
+
+  host.nbr = host_list.data();
+  host.nbr_n = host_n.data();
+  const Vec3* xs = fb.x.data();
+  int overflowed = 0;
+  for (int i = 0; i < n; ++i) {
+    ASSERT_EQ(fb.nbr_n.data()[i], host_n[std::size_t(i)]);
+    ASSERT_EQ(fb.rho.data()[i], host_rho[std::size_t(i)]);
+    std::vector<std::uint32_t> grid_order, host_order, dev_order;
+    for_neighbors(g, xs, xs[i], P.h2,
+                  [&](std::uint32_t j, const Vec3&, Real) { grid_order.push_back(j); });
+    stages::for_fluid_neighbors(host, g, i, xs[i], P.h2, [&](std::uint32_t j, const Vec3&, Real) {
+      host_order.push_back(j);
+    });
+    stages::for_fluid_neighbors(dev, g, i, xs[i], P.h2, [&](std::uint32_t j, const Vec3&, Real) {
+      dev_order.push_back(j);
+    });
+    ASSERT_EQ(host_order, grid_order) << "particle " << i;
+    ASSERT_EQ(dev_order, grid_order) << "particle " << i;
+    const int m = fb.nbr_n.data()[i];
+    if (m < 0) {
+      ++overflowed;
+    } else {
+      ASSERT_EQ(m, int(grid_order.size()));
+      for (int k = 0; k < m; ++k) {
+        ASSERT_EQ(host_list[std::size_t(i) * std::size_t(fb.nbr_cap) + std::size_t(k)],
+                  grid_order[std::size_t(k)]);
+        ASSERT_EQ(fb.nbr.data()[std::size_t(k) * std::size_t(cap) + std::size_t(i)],
+                  grid_order[std::size_t(k)]);
+      }
+    }
+    std::set<std::uint32_t> brute, found(grid_order.begin(), grid_order.end());
+    for (int j = 0; j < n; ++j)
+      if (norm2(xs[i] - xs[j]) < P.h2) brute.insert(std::uint32_t(j));
+    ASSERT_EQ(found, brute) << "particle " << i;
+  }
+  if (nbr_cap_override > 0)
+    EXPECT_GT(overflowed, 0);  // the grid-scan fallback ran
+  else
+    EXPECT_LT(overflowed, n / 10);
+}
+
+TEST(SphCells, NeighbourListsInBothLayoutsEqualBruteForce) { check_lists(0); }
+TEST(SphCells, OverflowingListsFallBackToTheGridInBothLayouts) { check_lists(8); }
+
+}  // namespace
