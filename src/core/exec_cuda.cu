@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
@@ -31,6 +32,7 @@ bool cuda_sync_checks() {
 CudaExec::CudaExec() { cuda_check(cudaStreamCreate(&stream), "stream create"); }
 
 CudaExec::~CudaExec() {
+  for (void* p : outgrown) cudaFree(p);
   if (tmp) cudaFree(tmp);
   if (scratch) cudaFree(scratch);
   if (stream) cudaStreamDestroy(stream);
@@ -38,18 +40,24 @@ CudaExec::~CudaExec() {
 
 void* CudaExec::temp(std::size_t bytes) {
   if (bytes > tmp_bytes) {
-    if (tmp) cudaFree(tmp);
-    tmp_bytes = bytes + bytes / 2;
-    cuda_check(cudaMalloc(&tmp, tmp_bytes), "temp alloc");
+    const std::size_t grown = std::max(bytes, 2 * tmp_bytes);
+    void* p = nullptr;
+    cuda_check(cudaMalloc(&p, grown), "temp alloc");
+    if (tmp) outgrown.push_back(tmp);  // no cudaFree inside a step (exec_cuda.cuh)
+    tmp = p;
+    tmp_bytes = grown;
   }
   return tmp;
 }
 
 std::uint32_t* CudaExec::scratch_u32(std::size_t n) {
   if (n > scratch_n) {
-    if (scratch) cudaFree(scratch);
-    scratch_n = n + n / 2;
-    cuda_check(cudaMalloc(&scratch, scratch_n * sizeof(std::uint32_t)), "scratch alloc");
+    const std::size_t grown = std::max(n, 2 * scratch_n);
+    void* p = nullptr;
+    cuda_check(cudaMalloc(&p, grown * sizeof(std::uint32_t)), "scratch alloc");
+    if (scratch) outgrown.push_back(scratch);
+    scratch = static_cast<std::uint32_t*>(p);
+    scratch_n = grown;
   }
   return scratch;
 }

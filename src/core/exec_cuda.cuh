@@ -8,6 +8,7 @@
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_reduce.cuh>
 #include <cub/device/device_scan.cuh>
+#include <vector>
 
 #include "sphfem/core/memory.h"
 
@@ -19,6 +20,10 @@ void cuda_check(cudaError_t e, const char* what, const char* file = nullptr, int
 // SPHFEM_CUDA_CHECK=1: synchronise after every launch (read once).
 bool cuda_sync_checks();
 
+// temp and scratch grow to twice their size when too small and keep what they outgrow until
+// the destructor: cudaFree synchronises the device, so none may run inside a step (the old
+// block may also still be in use by queued work). Doubling keeps the kept blocks below the
+// live one in size, and a run stops growing after its first steps.
 struct CudaExec {
   static constexpr MemSpace kSpace = MemSpace::Device;
   cudaStream_t stream = nullptr;
@@ -26,6 +31,7 @@ struct CudaExec {
   std::size_t tmp_bytes = 0;
   std::uint32_t* scratch = nullptr;  // sort ping-pong and reduction results
   std::size_t scratch_n = 0;
+  std::vector<void*> outgrown;  // freed by the destructor
   CudaExec();
   ~CudaExec();
   CudaExec(const CudaExec&) = delete;
