@@ -50,13 +50,13 @@ int run_bench(const BenchOptions& opt) {
   std::time_t now = std::time(nullptr);
   char date[32];
   std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
-  const std::string device = backend == Backend::Cpu ? cpu_model() : "CUDA device";
+  const std::string device = backend == Backend::Cpu ? cpu_model() : cuda_device_name();
   std::printf("dam-break benchmark on %s, %d threads, %s backend\n", device.c_str(), cpu_threads(),
               opt.backend.c_str());
   for (SolverKind kind : {SolverKind::WCSPH, SolverKind::DFSPH}) {
     const char* name = kind == SolverKind::WCSPH ? "wcsph" : "dfsph";
     if (opt.solver != "both" && opt.solver != name) continue;
-    const FluidModel model = compile_fluid(bench_scene(kind, opt.side));
+    const FluidModel model = compile_fluid(bench_scene(kind, opt.side > 0 ? opt.side : 40));
     auto solver = make_fluid_solver(model, backend);
     for (int i = 0; i < 20; ++i) solver->step(1.0);  // warm-up: caches, allocations
     solver->reset_profile();

@@ -7,7 +7,7 @@
 
 struct BenchOptions {
   int steps = 200;
-  int side = 40;
+  int side = 0;  // 0: the workload's own (dam break 40^3; --paper 45 x 32 x 45)
   std::string solver = "both";
   int threads = 0;
   std::string backend = "cpu";

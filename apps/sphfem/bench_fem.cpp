@@ -146,7 +146,7 @@ std::string thousands(long n) {
 int run_fem_bench(const BenchOptions& opt) {
   if (opt.threads > 0) set_cpu_threads(opt.threads);
   const Backend backend = opt.backend == "cuda" ? Backend::Cuda : Backend::Cpu;
-  const std::string device = backend == Backend::Cpu ? cpu_model() : "CUDA device";
+  const std::string device = backend == Backend::Cpu ? cpu_model() : cuda_device_name();
 
   std::vector<Case> cases;
   for (int cells : kSphereCells)

@@ -19,8 +19,11 @@ void device_free(void*) {}
 void device_copy(void*, bool, const void*, bool, std::size_t) { no_cuda(); }
 void device_zero(void*, std::size_t) { no_cuda(); }
 
+std::string cuda_device_name() { return "no CUDA backend"; }
+
 bool cuda_available(std::string* why) {
-  if (why) *why = "this build of sphfem has no CUDA backend (configured with SPHFEM_ENABLE_CUDA=OFF)";
+  if (why)
+    *why = "this build of sphfem has no CUDA backend (configured with SPHFEM_ENABLE_CUDA=OFF)";
   return false;
 }
 

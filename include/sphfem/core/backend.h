@@ -10,6 +10,8 @@ enum class Backend { Cpu, Cuda };
 // True when the library was built with CUDA and a device is present; otherwise `why` says
 // what is missing.
 bool cuda_available(std::string* why);
+// The name of the GPU the CUDA backend runs on (for result files).
+std::string cuda_device_name();
 
 // The stage a GPU error is reported in: Simulation names each stage of a step while it runs
 // (nullptr outside one). Kernel faults surface at a later synchronisation; with
