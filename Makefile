@@ -9,7 +9,14 @@ CMAKE_ARGS ?=
 DEMO_SCENE ?= scenes/default.json
 DEMO_OUT ?= out/default
 
-.PHONY: deps assets configure build demo test bench clean
+# The sanitizer build (AddressSanitizer + UndefinedBehaviorSanitizer, CPU only, own folder).
+ASAN_BUILD ?= build/asan
+ASAN_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+# What CI runs under the sanitizers (the whole suite takes hours there): the readers, their fuzz
+# tests, the limits, the output failures, and short runs of fluid, bodies and both coupled.
+ASAN_QUICK = FuzzReaders|SceneLimits|SceneErrors|SceneLoad|FemImport|IoFrame|IoSeries|RunInfo|CliOutput|Cli\.RunWritesFrames|Cli\.RunOfABodyScene|SimBodiesWithFluid|FluidAndBodyOnlyTradeMomentum
+
+.PHONY: deps assets configure build demo test bench clean asan-build test-asan test-asan-quick
 
 deps:
 	@bash scripts/install-deps.sh
@@ -31,6 +38,17 @@ demo: build
 
 test: build
 	ctest --test-dir $(BUILD) --output-on-failure -j$(JOBS)
+
+asan-build: deps
+	@cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=Debug -DSPHFEM_SANITIZE=ON -DSPHFEM_ENABLE_CUDA=OFF -DSPHFEM_ENABLE_GL=OFF >/dev/null
+	@cmake --build $(ASAN_BUILD) -j$(JOBS) --target sphfem_tests sphfem_cli
+
+# The whole suite under the sanitizers: any report fails its test.
+test-asan: asan-build
+	$(ASAN_ENV) ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS)
+
+test-asan-quick: asan-build
+	$(ASAN_ENV) ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS) -R '$(ASAN_QUICK)'
 
 bench: build
 	$(BUILD)/bin/sphfem bench --out bench/results

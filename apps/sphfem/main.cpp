@@ -1,15 +1,19 @@
 // The sphfem command: run, check, bench, render and view. Bad input exits with code 2 and one line
-// that names the file, the field and the fix; a run that blows up exits with code 3.
+// that names the file, the field and the fix; a run that blows up exits with code 3, one whose
+// output cannot be written (a full disk, a read-only folder) with code 4.
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <string>
 
 #include "bench.h"
 #include "render_cmd.h"
+#include "sphfem/io/atomic_file.h"
 #include "sphfem/scene/bodies.h"
 #include "sphfem/scene/compile.h"
 #include "sphfem/scene/fields.h"
+#include "sphfem/scene/limits.h"
 #include "sphfem/scene/load.h"
 #include "sphfem/sim/run.h"
 #include "sphfem/sim/state.h"
@@ -38,11 +42,8 @@ int cmd_check(const std::string& path) {
   double bytes = 0;
   if (s.has_fluid()) {
     const FluidModel m = compile_fluid(s);
-    const double cells = double(m.grid.cells());
-    // The buffers of src/sph/fluid_buffers.h and sample_set.h. Per particle: x, v, a, tmp (4 x 12 B); rho, p,
-    // alpha, kappa, kappa_sum, two warm starts, tmp (8 x 4 B); nb, full, id, tmp, keys, perm
-    // (6 x 4 B). Per wall sample: x (12 B), nine reals and two ints (44 B). Per cell 8 B.
-    bytes += m.capacity * (4 * 12.0 + 14 * 4.0) + m.boundary_x.size() * 56.0 + cells * 8.0;
+    const double cells = double(m.grid.nx) * double(m.grid.ny) * double(m.grid.nz);
+    bytes += fluid_bytes(m.capacity, double(m.boundary_x.size()), cells);
     std::printf("solver      %s, %s kernel, support %.4g m\n",
                 s.simulation.solver == SolverKind::DFSPH ? "DFSPH" : "WCSPH",
                 s.fluid.kernel == KernelKind::CubicSpline ? "cubic spline" : "Wendland C2",
@@ -73,13 +74,10 @@ int cmd_check(const std::string& path) {
           body.name.c_str(), shape_name(s.bodies[i].shape).c_str(), body.rest.size(),
           body.tets.size(), body.surface.size(), mass, pinned);
     }
-    // Per node: x, v and ten solver vectors (12 x 12 B), mass, damping, preconditioner,
-    // flags, gather start (37 B); per tet: nodes, gradients, moduli, rotated gradients, element
-    // forces, rotations, gather entries (196 B); per surface triangle 12 B.
-    bytes += b.nodes * 181.0 + b.elements * 196.0 + b.surface.size() * 12.0;
+    bytes += body_bytes(b.nodes, b.elements, double(b.surface.size()));
   }
-  std::printf("time        %.4g s, frames every %.4g s (%d frames)\n", s.simulation.duration,
-              1.0 / s.output.fps, int(s.simulation.duration * s.output.fps) + 1);
+  std::printf("time        %.4g s, frames every %.4g s (%.0f frames)\n", s.simulation.duration,
+              1.0 / s.output.fps, frame_count(s.simulation.duration, s.output.fps));
   std::printf("memory      about %.1f MiB\n", bytes / (1024.0 * 1024.0));
   std::printf("ok\n");
   return 0;
@@ -115,6 +113,12 @@ int cmd_run(const std::string& path, const std::string& out, const std::string& 
     std::fprintf(stderr, "error: %s: %s\n", path.c_str(), e.what());
     std::fprintf(stderr, "frames written so far are kept in %s\n", opt.out_dir.c_str());
     return 3;
+  } catch (const io::WriteError& e) {
+    std::fprintf(stderr,
+                 "error: %s; free space on the disk, or give --out a folder you can write to\n",
+                 e.what());
+    std::fprintf(stderr, "frames written so far are kept in %s\n", opt.out_dir.c_str());
+    return 4;
   }
   return 0;
 }
@@ -122,6 +126,9 @@ int cmd_run(const std::string& path, const std::string& out, const std::string& 
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A file-size limit (ulimit -f) then fails the write with EFBIG, which is reported and exits
+  // with code 4, instead of the signal killing the run without a word.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"sphfem: SPH fluids coupled with FEM soft bodies by ray tracing"};
   app.require_subcommand(1);
 

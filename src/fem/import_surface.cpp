@@ -5,9 +5,16 @@
 #include <algorithm>
 #include <array>
 #include <assimp/Importer.hpp>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
+#include <sstream>
+#include <vector>
 
 #include "sphfem/fem/import.h"
 
@@ -23,11 +30,99 @@ std::array<double, 3> key_of(const aiVector3D& p) {
   return {double(p.x) + 0.0, double(p.y) + 0.0, double(p.z) + 0.0};
 }
 
+// In an ASCII PLY each element is a line of its properties; a list's count must fit on its line
+// (Assimp takes a count of 2^31 as given and spends minutes on it: found by fuzzing).
+void check_ascii_ply_lists(const std::string& path, const std::string& data, std::size_t end) {
+  struct Element {
+    long count = 0;
+    std::vector<bool> list;  // per property
+  };
+  std::vector<Element> elements;
+  bool ascii = false;
+  std::istringstream header(data.substr(0, end));
+  for (std::string line; std::getline(header, line);) {
+    std::istringstream words(line);
+    std::string key, word;
+    words >> key >> word;
+    if (key == "format") ascii = word == "ascii";
+    if (key == "element") {
+      elements.push_back({});
+      words >> elements.back().count;
+    }
+    if (key == "property" && !elements.empty()) elements.back().list.push_back(word == "list");
+    // Assimp loops forever over a header line it does not know (found by fuzzing).
+    static const char* const known[] = {"ply",     "format",   "comment", "obj_info",
+                                        "element", "property", ""};
+    if (std::find(std::begin(known), std::end(known), key) == std::end(known))
+      throw MeshError(path, "the PLY header has a line that is not a header line ('" + key + "')",
+                      kExportHint);
+  }
+  const std::size_t body_at = data.find('\n', end);
+  if (!ascii || body_at == std::string::npos) return;
+  std::istringstream body(data.substr(body_at + 1));
+  for (const Element& e : elements)
+    for (long i = 0; i < e.count; ++i) {
+      std::string line;
+      do {
+        if (!std::getline(body, line)) return;  // a file cut short Assimp reports itself
+      } while (line.find_first_not_of(" \t\r") == std::string::npos);
+      std::istringstream words(line);
+      std::vector<std::string> tokens;
+      for (std::string t; words >> t;) tokens.push_back(t);
+      std::size_t at = 0;
+      for (bool list : e.list) {
+        if (at >= tokens.size()) break;
+        if (!list) {
+          ++at;
+          continue;
+        }
+        const double n = std::strtod(tokens[at].c_str(), nullptr);
+        const double room = double(tokens.size() - at - 1);
+        if (!(n >= 0 && n <= room))
+          throw MeshError(path,
+                          "a list in the PLY body announces " + tokens[at] +
+                              " values on a line that holds " + std::to_string(tokens.size()),
+                          kExportHint);
+        at += 1 + std::size_t(n);
+      }
+    }
+}
+
+// Assimp's text readers can loop forever over a damaged text file (found by fuzzing: a PLY
+// header with NUL bytes and no end_header line never returns), so the text parts are checked
+// first: a PLY header must be text ending in end_header, an OBJ or ASCII STL file text.
+void check_text_parts(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  auto is_text = [](unsigned char c) { return c == '\n' || c == '\r' || c == '\t' || c >= 32; };
+  if (ext == ".ply") {
+    const std::size_t end = data.find("end_header");
+    if (data.compare(0, 3, "ply") != 0 || end == std::string::npos)
+      throw MeshError(path, "the PLY header is damaged (no \"ply\" first or no end_header line)",
+                      kExportHint);
+    if (!std::all_of(data.begin(), data.begin() + long(end), is_text))
+      throw MeshError(path, "the PLY header holds bytes that are not text", kExportHint);
+    check_ascii_ply_lists(path, data, end);
+    return;
+  }
+  // A binary STL is 84 bytes and 50 per triangle, whatever its first bytes say.
+  std::uint32_t triangles = 0;
+  if (data.size() >= 84) std::memcpy(&triangles, data.data() + 80, 4);
+  const bool binary_stl = data.size() >= 84 && data.size() == 84 + 50 * std::uint64_t(triangles);
+  if ((ext == ".obj" || (ext == ".stl" && !binary_stl)) && data.find('\0') != std::string::npos)
+    throw MeshError(path, "the file holds NUL bytes, so it is neither a text file nor a binary STL",
+                    kExportHint);
+}
+
 }  // namespace
 
 SurfaceMesh load_surface(const std::string& path) {
   if (!std::ifstream(path).good())
     throw MeshError(path, "cannot open the file", "check the path and that the file is readable");
+  check_text_parts(path);
 
   Assimp::Importer importer;
   // Per-face normals (STL), texture seams and colours split vertices; dropping them first lets
@@ -36,13 +131,35 @@ SurfaceMesh load_surface(const std::string& path) {
                               aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS |
                                   aiComponent_COLORS | aiComponent_TEXCOORDS |
                                   aiComponent_BONEWEIGHTS);
-  const aiScene* scene = importer.ReadFile(
-      path, aiProcess_RemoveComponent | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                aiProcess_PreTransformVertices | aiProcess_SortByPType);
+  // Read and validated alone first: a corrupt file (a face indexing past the vertices, a face
+  // without corners, a coordinate that is not a number) is refused here, before the
+  // post-processing steps, which read such faces out of bounds or stop on an assertion.
+  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  auto refuse = [&](const std::string& why) {
+    throw MeshError(path, "cannot read it as a surface mesh (" + why + ")", kExportHint);
+  };
   if (!scene) {
     std::string why = importer.GetErrorString();
     std::replace(why.begin(), why.end(), '\n', ' ');
-    throw MeshError(path, "cannot read it as a surface mesh (" + why + ")", kExportHint);
+    refuse(why);
+  }
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* mesh = scene->mMeshes[m];
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f)
+      if (mesh->mFaces[f].mNumIndices == 0) refuse("face " + std::to_string(f) + " has no corners");
+    for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+      const aiVector3D& p = mesh->mVertices[v];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        refuse("vertex " + std::to_string(v) + " has a coordinate that is not a finite number");
+    }
+  }
+  scene = importer.ApplyPostProcessing(aiProcess_RemoveComponent | aiProcess_Triangulate |
+                                       aiProcess_JoinIdenticalVertices |
+                                       aiProcess_PreTransformVertices | aiProcess_SortByPType);
+  if (!scene) {
+    std::string why = importer.GetErrorString();
+    std::replace(why.begin(), why.end(), '\n', ' ');
+    refuse(why);
   }
 
   // Meshes of one file (OBJ groups, materials) share positions that Assimp keeps apart, so

@@ -19,7 +19,7 @@ void ensure_directory(const std::string& dir) {
   std::string reason = fs::exists(dir, ec2) ? "a file of that name is in the way"
                        : ec                 ? ec.message()
                                             : "unknown error";
-  throw std::runtime_error("cannot create folder '" + dir + "': " + reason);
+  throw WriteError("cannot create folder '" + dir + "': " + reason);
 }
 
 namespace {
@@ -42,7 +42,7 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)), temp_(path_ +
   file_ = std::fopen(temp_.c_str(), "wb");
   if (!file_) {
     int err = errno;
-    throw std::runtime_error("cannot write '" + path_ + "': " + describe(temp_, err));
+    throw WriteError("cannot write '" + path_ + "': " + describe(temp_, err));
   }
   // Frames are written in many small pieces; a larger buffer keeps syscalls few.
   std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
@@ -60,7 +60,7 @@ void AtomicFile::discard() noexcept {
 
 void AtomicFile::fail(const std::string& what, int err) {
   discard();
-  throw std::runtime_error(what + " '" + path_ + "': " + describe(temp_, err));
+  throw WriteError(what + " '" + path_ + "': " + describe(temp_, err));
 }
 
 void AtomicFile::write(const void* data, std::size_t bytes) {
@@ -81,8 +81,7 @@ void AtomicFile::commit() {
   if (std::rename(temp_.c_str(), path_.c_str()) != 0) {
     int err = errno;
     std::remove(temp_.c_str());
-    throw std::runtime_error("cannot rename '" + temp_ + "' to '" + path_ +
-                             "': " + std::strerror(err));
+    throw WriteError("cannot rename '" + temp_ + "' to '" + path_ + "': " + std::strerror(err));
   }
   committed_ = true;
 }

@@ -1,5 +1,7 @@
 #include "sphfem/io/gauges.h"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -47,8 +49,10 @@ GaugeWriter::GaugeWriter(const std::string& path, std::vector<std::string> colum
     std::error_code ec;
     if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
       msg += " (folder '" + parent.string() + "' does not exist)";
-    throw std::runtime_error(msg);
+    throw WriteError(msg);
   }
+  // Unbuffered: a failed line must not linger in a buffer that a later flush would write.
+  std::setvbuf(file_, nullptr, _IONBF, 0);
   std::string header;
   for (std::size_t i = 0; i < columns_.size(); ++i)
     header += (i ? "," : "") + csv_field(columns_[i]);
@@ -88,8 +92,9 @@ GaugeWriter::GaugeWriter(const std::string& path, std::vector<std::string> colum
   in.close();
   write_file_atomic(path_, kept);
   file_ = std::fopen(path_.c_str(), "a");
-  if (!file_)
-    throw std::runtime_error("cannot open gauge file '" + path_ + "': " + std::strerror(errno));
+  if (!file_) throw WriteError("cannot open gauge file '" + path_ + "': " + std::strerror(errno));
+  std::setvbuf(file_, nullptr, _IONBF, 0);
+  complete_ = long(kept.size());
 }
 
 GaugeWriter::~GaugeWriter() {
@@ -97,7 +102,11 @@ GaugeWriter::~GaugeWriter() {
 }
 
 GaugeWriter::GaugeWriter(GaugeWriter&& o) noexcept
-    : path_(std::move(o.path_)), columns_(std::move(o.columns_)), file_(o.file_) {
+    : path_(std::move(o.path_)),
+      columns_(std::move(o.columns_)),
+      kept_times_(std::move(o.kept_times_)),
+      file_(o.file_),
+      complete_(o.complete_) {
   o.file_ = nullptr;
 }
 
@@ -106,7 +115,9 @@ GaugeWriter& GaugeWriter::operator=(GaugeWriter&& o) noexcept {
     if (file_) std::fclose(file_);
     path_ = std::move(o.path_);
     columns_ = std::move(o.columns_);
+    kept_times_ = std::move(o.kept_times_);
     file_ = o.file_;
+    complete_ = o.complete_;
     o.file_ = nullptr;
   }
   return *this;
@@ -126,10 +137,17 @@ void GaugeWriter::row(const std::vector<double>& values) {
 void GaugeWriter::put(const std::string& line) {
   if (!file_) throw std::logic_error("gauge file '" + path_ + "' is closed");
   errno = 0;
-  // Flushing every line costs little at gauge rates and keeps rows written before a crash.
-  if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0)
-    throw std::runtime_error("cannot write gauge file '" + path_ +
-                             "': " + std::strerror(errno ? errno : EIO));
+  // Writing every line at once costs little at gauge rates and keeps rows written before a crash.
+  if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0) {
+    const int err = errno ? errno : EIO;
+    // Cut off the part of the line that was written; the rows before it stay whole.
+    std::clearerr(file_);
+    if (ftruncate(fileno(file_), complete_) != 0) {
+      // Nothing more can be done about the file; the message below says why it stopped.
+    }
+    throw WriteError("cannot write gauge file '" + path_ + "': " + std::strerror(err));
+  }
+  complete_ += long(line.size());
 }
 
 }  // namespace sphfem::io

@@ -141,7 +141,11 @@ void read_cell_block(std::map<std::string, std::string>& attrs, const char* src,
 // types and the cell arrays.
 PointSet read_vtu_file(const std::string& path, bool cells) {
   const std::string data = read_all(path);
-  auto bad = [&](const std::string& why) {
+  // Parts of the message come from the file: bytes that are not printable text are shown as
+  // '?', so the message stays one line whatever the file holds (found by fuzzing).
+  auto bad = [&](std::string why) {
+    for (char& c : why)
+      if (static_cast<unsigned char>(c) < 32 || c == 127) c = '?';
     return std::runtime_error("'" + path + "' is not a VTU file written by write_vtu: " + why);
   };
   // Numbers in attributes go through std::sto*; report their failures as a bad file.

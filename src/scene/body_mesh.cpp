@@ -24,7 +24,8 @@ int cells_along(double extent, double h) { return std::max(1, int(std::lround(ex
 // Lattice cells of a generated shape, as its generator takes them.
 struct ShapeCells {
   int nx = 1, ny = 1, nz = 1;  // box, cloth (ny = 1); tube: layers, rings, segments
-  long tets = 0;               // 6 per cell; an upper bound for the cup (its hollow is cut)
+  double tets = 0;  // 6 per cell; an upper bound for the cup (its hollow is cut); a double
+                    // so that a hostile resolution cannot overflow it
 };
 
 ShapeCells shape_cells(const BodySpec& b) {
@@ -63,7 +64,7 @@ ShapeCells shape_cells(const BodySpec& b) {
     case BodyShape::Mesh:
       return c;
   }
-  c.tets = 6L * c.nx * c.ny * c.nz;
+  c.tets = 6.0 * double(c.nx) * double(c.ny) * double(c.nz);
   return c;
 }
 
@@ -110,6 +111,16 @@ TetMesh read_mesh_file(const BodySpec& b, const std::string& at, const std::stri
     }
     SurfaceMesh s = load_surface(path);
     transform(s, b.scale, b.offset);
+    // TetGen makes at least volume / max_volume tetrahedra: refuse a bound that would make
+    // more than the cap before it spends minutes meshing.
+    const double volume = std::fabs(enclosed_volume(s.x, s.tris));
+    if (b.max_volume > 0 && volume / b.max_volume > scene::kMaxBodyTets)
+      fail(scene_file, at + ".max_volume",
+           "the surface encloses " + num(volume) + " m^3, so max_volume " + num(b.max_volume) +
+               " m^3 would make more than " + num(volume / b.max_volume) +
+               " tetrahedra, more than the limit of " + std::to_string(scene::kMaxBodyTets),
+           "set max_volume to at least " + num(volume / scene::kMaxBodyTets) +
+               " m^3, or 0 to let TetGen choose");
     TetgenOptions o;
     o.max_volume = b.max_volume;
     o.quality = b.quality;
@@ -122,6 +133,12 @@ TetMesh read_mesh_file(const BodySpec& b, const std::string& at, const std::stri
 
 }  // namespace
 
+ShapeSize shape_size(const BodySpec& b) {
+  if (b.shape == BodyShape::Mesh) return {};
+  const ShapeCells c = shape_cells(b);
+  return {double(c.nx + 1) * double(c.ny + 1) * double(c.nz + 1), double(c.tets)};
+}
+
 TetMesh body_rest_mesh(const BodySpec& b, const std::string& at, const std::string& scene_file) {
   if (b.shape == BodyShape::Mesh) {
     if (b.file.empty())
@@ -133,7 +150,7 @@ TetMesh body_rest_mesh(const BodySpec& b, const std::string& at, const std::stri
   const ShapeCells c = shape_cells(b);
   if (c.tets > scene::kMaxBodyTets)
     fail(scene_file, at + ".resolution",
-         "resolution " + std::to_string(b.resolution) + " would make " + std::to_string(c.tets) +
+         "resolution " + std::to_string(b.resolution) + " would make " + num(c.tets) +
              " tetrahedra, more than " + std::to_string(scene::kMaxBodyTets),
          "lower the resolution");
   try {

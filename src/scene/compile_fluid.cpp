@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sphfem/scene/compile.h"
+#include "sphfem/scene/limits.h"
 
 namespace sphfem {
 
@@ -74,6 +75,16 @@ std::string check_solver_settings(const SceneSpec& s) {
 }
 
 FluidModel compile_fluid(const SceneSpec& s) {
+  // Counted before the lattices are filled, for scenes built in code (a loaded scene was
+  // checked with its memory by validate_scene): ints below would overflow past these caps.
+  const SceneSize size = scene_size(s);
+  if (size.grid_cells > kMaxGridCells || size.wall_samples > kMaxWallSamples)
+    throw std::runtime_error("domain: the cell grid would have " + std::to_string(size.grid_cells) +
+                             " cells and the walls " + std::to_string(size.wall_samples) +
+                             " samples; make the domain smaller or the particles larger");
+  if (size.capacity > kMaxParticles)
+    throw std::runtime_error("fluid: the scene would need about " + std::to_string(size.capacity) +
+                             " particles; use larger particles or fewer emitters");
   FluidModel m;
   SphParams& P = m.params;
   const FluidSpec& fl = s.fluid;
@@ -151,9 +162,6 @@ FluidModel compile_fluid(const SceneSpec& s) {
   m.grid.nx = int(std::ceil((s.domain.hi.x - s.domain.lo.x + 2 * pad) / P.h));
   m.grid.ny = int(std::ceil((s.domain.hi.y - s.domain.lo.y + 2 * pad) / P.h));
   m.grid.nz = int(std::ceil((s.domain.hi.z - s.domain.lo.z + 2 * pad) / P.h));
-  if (m.grid.cells() > (1ll << 30))
-    throw std::runtime_error("domain: the cell grid would have " + std::to_string(m.grid.cells()) +
-                             " cells; make the domain smaller or the particles larger");
 
   // Emitter discs: a square lattice in the nozzle plane; the layer spacing is set so the
   // emitted volume equals pi r^2 * speed * time exactly, one layer at a time.

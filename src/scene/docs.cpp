@@ -5,6 +5,7 @@
 #include "scene/messages.h"
 #include "scene/write.h"
 #include "sphfem/scene/fields.h"
+#include "sphfem/scene/limits.h"
 #include "sphfem/scene/load.h"
 
 namespace sphfem {
@@ -18,6 +19,16 @@ using scene::ObjectTable;
 using scene::pretty;
 using scene::to_json;
 using namespace scene_text;
+
+// 200000000 as "200,000,000".
+std::string count_text(double n) {
+  std::string digits = std::to_string(static_cast<long long>(n)), out;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
+}
 
 const char* type_name(FieldType t) {
   switch (t) {
@@ -128,6 +139,27 @@ std::string scene_format_markdown() {
      << "- Every body lies inside the domain; each pinned box holds at least one of its rest "
         "nodes and each pinned index is below its node count.\n"
      << "- The solver adds its own checks, such as the time step against the CFL condition.\n\n";
+
+  // The caps of scene/limits.h, checked from the fields before anything is allocated.
+  md << "## Limits\n\n"
+     << "Before anything is built, the loader counts what the scene would need from its fields "
+        "alone and refuses, naming the field that drives the count, a scene that passes a cap "
+        "(`sphfem check` prints the counts of a scene that fits):\n\n"
+     << "- at most " << count_text(kMaxParticles)
+     << " fluid particles, those the emitters add over the run and `fluid.max_particles` "
+        "included;\n"
+     << "- at most " << count_text(kMaxWallSamples) << " samples in the tank's walls and "
+     << count_text(kMaxGridCells) << " cells in the neighbour grid (cell size 4 * "
+     << "`particle_radius` over the domain and its walls);\n"
+     << "- at most " << count_text(kMaxFrames)
+     << " frames in a run (`simulation.duration` * `output.fps` + 1, also for `run "
+        "--duration`);\n"
+     << "- at most " << scene::kMaxBodyTets
+     << " tetrahedra per body: a shape's `resolution`, and a mesh file's `max_volume` (the "
+        "surface's volume / `max_volume` is fewer tetrahedra than TetGen makes);\n"
+     << "- and the memory all of it needs (about 104 B per particle, 56 B per wall sample, 8 B "
+        "per grid cell, 181 B per body node and 196 B per tetrahedron) at most the memory free "
+        "on the machine (`MemAvailable`, or a container's `memory.max` when lower).\n\n";
 
   const SceneSpec sample = scene::example_scene();
   std::string example;

@@ -11,6 +11,7 @@
 #include "sphfem/scene/bodies.h"
 #include "sphfem/scene/compile.h"
 #include "sphfem/scene/fields.h"
+#include "sphfem/scene/limits.h"
 #include "sphfem/scene/load.h"
 
 namespace sphfem {
@@ -229,6 +230,8 @@ void validate_scene(const SceneSpec& s, const std::string& path) {
            "set end greater than start, or leave end out to emit until the run ends");
   }
 
+  // Counts and memory before anything is built: the bodies below are.
+  check_limits(s, path, available_memory_bytes());
   check_bodies(s, path);
 
   std::map<std::string, std::size_t> names;

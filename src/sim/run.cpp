@@ -23,6 +23,7 @@
 #include "sphfem/io/run_info.h"
 #include "sphfem/io/vtu.h"
 #include "sphfem/scene/bodies.h"
+#include "sphfem/scene/limits.h"
 #include "sphfem/sim/body_frames.h"
 #include "sphfem/sim/checkpoint.h"
 #include "sphfem/sim/fluid_frame.h"
@@ -161,6 +162,8 @@ class Progress {
 RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
   if (opt.threads > 0) set_cpu_threads(opt.threads);
   const double duration = opt.duration >= 0 ? opt.duration : scene.simulation.duration;
+  if (opt.duration >= 0)
+    check_frame_limit(duration, scene.output.fps, scene.path, "--duration (simulation.duration)");
   // Everything that can fail on input happens before the first file is written.
   Simulation sim(scene, opt.backend);
   FluidSolver* solver = sim.fluid();

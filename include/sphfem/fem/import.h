@@ -82,6 +82,8 @@ class TextLines {
   [[noreturn]] void fail(const std::string& what, const std::string& fix) const;
   [[noreturn]] void fail_eof(const char* expected) const;  // the file ends too early
   const std::string& path() const { return path_; }
+  // Lines after the current one: an upper bound for the records a header may announce.
+  std::size_t lines_left() const { return lines_.size() - line_; }
 
  private:
   std::string path_;

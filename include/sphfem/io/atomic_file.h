@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -14,12 +15,19 @@
 
 namespace sphfem::io {
 
-// Creates `dir` and its parents; throws std::runtime_error naming the folder when it cannot
+// Output that cannot be written (a folder that cannot be made, a full disk, a file too large):
+// the message names the path and the OS reason. `sphfem run` stops at once with exit code 4.
+struct WriteError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Creates `dir` and its parents; throws WriteError naming the folder when it cannot
 // (e.g. a file of that name is in the way). An empty string means the current folder.
 void ensure_directory(const std::string& dir);
 
 // A temporary file that becomes `path` on commit(). Every failure throws std::runtime_error
-// naming the path and the OS reason; the temporary is removed unless commit() succeeded.
+// naming the path and the OS reason (a WriteError for the OS's refusals); the temporary is
+// removed unless commit() succeeded.
 class AtomicFile {
  public:
   explicit AtomicFile(std::string path);

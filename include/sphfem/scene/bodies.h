@@ -19,6 +19,13 @@ struct BodyMesh {
   std::vector<std::uint8_t> pinned;  // per node: 1 = held fixed
 };
 
+// Nodes and tetrahedra a generated shape will have, counted without building it (upper bounds
+// for the cup, whose hollow is cut from a full lattice); zero for a mesh file.
+struct ShapeSize {
+  double nodes = 0, tets = 0;
+};
+ShapeSize shape_size(const BodySpec& body);
+
 // The rest mesh a body's shape or file gives, before any check of its place in the scene.
 // `scene_file` names the scene in messages and is the folder a relative mesh path starts
 // from. Throws SceneError (a mesh file missing, unreadable or unfit; a shape too fine).

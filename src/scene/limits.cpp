@@ -1,0 +1,220 @@
+// Counting a scene before it is built (scene/limits.h): the same lattices as compile_fluid and
+// the body generators, counted in doubles instead of filled, and checked against the caps.
+#include "sphfem/scene/limits.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "scene/messages.h"
+#include "sphfem/scene/bodies.h"
+
+namespace sphfem {
+namespace {
+
+using namespace scene_text;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Lattice points along one axis inside [lo, hi] at spacing d, as compile_fluid places them.
+double inner_points(double extent, double d) {
+  return std::max(1.0, std::floor(extent / d + 1e-6));
+}
+
+// Particles of all emitters over the run: the volume they pour, one particle per d^3, plus a
+// disc of slack per emitter for the layer in flight (the lattice holds rho0 at one per d^3).
+double emitted_particles(const SceneSpec& s, double d) {
+  double n = 0;
+  for (const EmitterSpec& e : s.fluid.emitters) {
+    const double active = std::max(0.0, std::min(e.end, s.simulation.duration) - e.start);
+    const double disc = kPi * (e.radius / d) * (e.radius / d) + 4.0 * e.radius / d + 1.0;
+    n += e.speed * active * kPi * e.radius * e.radius / (d * d * d) + 2.0 * disc;
+  }
+  return n;
+}
+
+std::string count(double n) {
+  char buf[64];
+  if (!std::isfinite(n)) return "more than 1e308";
+  if (n < 1e9)
+    std::snprintf(buf, sizeof buf, "%.0f", n);
+  else
+    std::snprintf(buf, sizeof buf, "%.3g", n);
+  return buf;
+}
+
+std::string gib(double bytes) {
+  char buf[64];
+  if (bytes < 1024.0 * 1024.0 * 1024.0)
+    std::snprintf(buf, sizeof buf, "%.0f MiB", bytes / (1024.0 * 1024.0));
+  else
+    std::snprintf(buf, sizeof buf, "%.3g GiB", bytes / (1024.0 * 1024.0 * 1024.0));
+  return buf;
+}
+
+// x rounded up to three significant digits, for the numbers a fix suggests.
+std::string up3(double x) {
+  if (!(x > 0) || !std::isfinite(x)) return num(x);
+  const double unit = std::pow(10.0, std::floor(std::log10(x)) - 2);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", std::ceil(x / unit) * unit);
+  return buf;
+}
+
+// The particle radius at which `n` particles (scaling as r^-3) come down to `target`.
+std::string radius_for(const SceneSpec& s, double n, double target) {
+  return up3(s.fluid.particle_radius * std::cbrt(n / target));
+}
+
+// A number read from a one-line file such as cgroup v2's memory.max; "max" or absent: none.
+double read_bytes(const char* path) {
+  std::ifstream in(path);
+  std::string word;
+  if (!(in >> word) || word == "max") return -1;
+  try {
+    return std::stod(word);
+  } catch (...) { return -1; }
+}
+
+}  // namespace
+
+double frame_count(double duration, double fps) { return std::floor(duration * fps) + 1.0; }
+
+double fluid_bytes(double capacity, double wall_samples, double grid_cells) {
+  // Per particle: x, v, a, tmp (4 x 12 B); rho, p, alpha, kappa, kappa_sum, two warm starts,
+  // tmp (8 x 4 B); nb, full, id, tmp, keys, perm (6 x 4 B). Per wall sample: x (12 B), nine
+  // reals and two ints (44 B). Per cell 8 B.
+  return capacity * (4 * 12.0 + 14 * 4.0) + wall_samples * 56.0 + grid_cells * 8.0;
+}
+
+double body_bytes(double nodes, double tets, double surface_triangles) {
+  // Per node: x, v and ten solver vectors (12 x 12 B), mass, damping, preconditioner, flags,
+  // gather start (37 B); per tet: nodes, gradients, moduli, rotated gradients, element forces,
+  // rotations, gather entries (196 B); per surface triangle 12 B.
+  return nodes * 181.0 + tets * 196.0 + surface_triangles * 12.0;
+}
+
+SceneSize scene_size(const SceneSpec& s) {
+  SceneSize z;
+  z.frames = frame_count(s.simulation.duration, s.output.fps);
+  if (s.has_fluid()) {
+    const double d = 2.0 * s.fluid.particle_radius;
+    for (const FluidBlockSpec& b : s.fluid.blocks)
+      z.particles += inner_points(b.hi.x - b.lo.x, d) * inner_points(b.hi.y - b.lo.y, d) *
+                     inner_points(b.hi.z - b.lo.z, d);
+    z.emitted = emitted_particles(s, d);
+    z.capacity = s.fluid.max_particles > 0 ? std::max(z.particles, double(s.fluid.max_particles))
+                                           : z.particles + z.emitted;
+    // Tank walls and grid as compile_fluid lays them: kernel support h = 2 d, so 2 layers.
+    const double h = 2.0 * d, layers = 2.0, pad = layers * d + h;
+    double all = 1, inner = 1;
+    z.grid_cells = 1;
+    for (int k = 0; k < 3; ++k) {
+      const double extent = s.domain.hi[k] - s.domain.lo[k];
+      const double in = inner_points(extent, d);
+      const double walls = (k == 1 && s.domain.open_top) ? layers : 2.0 * layers;
+      all *= in + walls;
+      inner *= in;
+      z.grid_cells *= std::ceil((extent + 2.0 * pad) / h);
+    }
+    z.wall_samples = all - inner;
+    z.fluid_bytes = fluid_bytes(z.capacity, z.wall_samples, z.grid_cells);
+  }
+  for (const BodySpec& b : s.bodies) {
+    const ShapeSize shape = shape_size(b);
+    z.body_nodes += shape.nodes;
+    z.body_tets += shape.tets;
+  }
+  z.body_bytes = body_bytes(z.body_nodes, z.body_tets, 0.0);
+  return z;
+}
+
+double available_memory_bytes() {
+  double avail = -1;
+  std::ifstream in("/proc/meminfo");
+  std::string key, unit;
+  double kib = 0;
+  while (in >> key >> kib) {
+    std::getline(in, unit);
+    if (key == "MemAvailable:") {
+      avail = kib * 1024.0;
+      break;
+    }
+  }
+  if (avail < 0) avail = double(sysconf(_SC_AVPHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+  // A container's limit can be far below the machine's free memory.
+  const double limit = read_bytes("/sys/fs/cgroup/memory.max");
+  const double used = read_bytes("/sys/fs/cgroup/memory.current");
+  if (limit > 0) avail = std::min(avail, std::max(0.0, limit - std::max(0.0, used)));
+  return avail;
+}
+
+void check_frame_limit(double duration, double fps, const std::string& file,
+                       const std::string& field) {
+  const double frames = frame_count(duration, fps);
+  if (frames > kMaxFrames)
+    fail(file, field,
+         "the run would write " + count(frames) + " frames (" + num(duration) + " s at " +
+             num(fps) + " frames/s), more than the limit of " + count(kMaxFrames),
+         "shorten the duration to at most " + num(std::floor((kMaxFrames - 1) / fps)) +
+             " s or lower output.fps");
+}
+
+void check_limits(const SceneSpec& s, const std::string& file, double available_bytes) {
+  check_frame_limit(s.simulation.duration, s.output.fps, file, "simulation.duration");
+  const SceneSize z = scene_size(s);
+  const std::string need = " (about " + gib(z.bytes()) + ")";
+  if (s.has_fluid()) {
+    if (z.capacity > kMaxParticles) {
+      const std::string what = "the scene would need " + count(z.capacity) + " particles" + need +
+                               ", more than the limit of " + count(kMaxParticles);
+      if (s.fluid.max_particles > 0 && double(s.fluid.max_particles) >= z.particles)
+        fail(file, "fluid.max_particles", what,
+             "set max_particles to at most " + count(kMaxParticles));
+      if (z.particles >= z.emitted)
+        fail(file, "fluid.particle_radius", what + " in fluid.blocks",
+             "set particle_radius to at least " + radius_for(s, z.capacity, kMaxParticles) +
+                 " m or make the blocks smaller");
+      fail(file, "fluid.emitters", what + " from the emitters over the run",
+           "set fluid.particle_radius to at least " + radius_for(s, z.capacity, kMaxParticles) +
+               " m, end the emitters sooner (end) or shorten simulation.duration");
+    }
+    if (z.grid_cells > kMaxGridCells)
+      fail(file, "fluid.particle_radius",
+           "the neighbour grid over the domain would have " + count(z.grid_cells) +
+               " cells (cell size 4 * particle_radius)" + need + ", more than the limit of " +
+               count(kMaxGridCells),
+           "set particle_radius to at least " + radius_for(s, z.grid_cells, kMaxGridCells) +
+               " m or make the domain smaller");
+    if (z.wall_samples > kMaxWallSamples)
+      fail(file, "fluid.particle_radius",
+           "the tank's walls would need " + count(z.wall_samples) + " samples" + need +
+               ", more than the limit of " + count(kMaxWallSamples),
+           "set particle_radius to at least " +
+               up3(s.fluid.particle_radius * std::sqrt(z.wall_samples / kMaxWallSamples)) +
+               " m or make the domain smaller");
+  }
+  if (z.bytes() > available_bytes) {
+    const bool fluid = z.fluid_bytes >= z.body_bytes;
+    const std::string what =
+        "the scene would need about " + gib(z.bytes()) + " of memory (" + count(z.capacity) +
+        " particles, " + count(z.wall_samples) + " wall samples, " + count(z.body_tets) +
+        " tetrahedra), more than the " + gib(available_bytes) + " free on this machine";
+    if (fluid)
+      fail(file, "fluid.particle_radius", what,
+           "set particle_radius to at least " +
+               radius_for(s, z.fluid_bytes, std::max(1.0, available_bytes - z.body_bytes)) +
+               " m, make the fluid smaller or free memory");
+    std::size_t biggest = 0;
+    for (std::size_t i = 1; i < s.bodies.size(); ++i)
+      if (shape_size(s.bodies[i]).tets > shape_size(s.bodies[biggest]).tets) biggest = i;
+    fail(file, indexed("bodies", biggest) + ".resolution", what,
+         "lower the bodies' resolution or free memory");
+  }
+}
+
+}  // namespace sphfem
