@@ -13,6 +13,8 @@ packages=(
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev libglfw3-dev ffmpeg
   # The Python module (pybind11), its tests and the plotting example.
   python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib
+  # The readers' libFuzzer targets (fuzz/README.md): clang, its libFuzzer and OpenMP runtime.
+  clang libclang-rt-14-dev libomp-dev
 )
 
 missing=()
