@@ -12,6 +12,7 @@
 
 #include "scene/messages.h"
 #include "sphfem/scene/bodies.h"
+#include "sphfem/scene/fields.h"
 
 namespace sphfem {
 namespace {
@@ -198,6 +199,9 @@ void check_limits(const SceneSpec& s, const std::string& file, double available_
                up3(s.fluid.particle_radius * std::sqrt(z.wall_samples / kMaxWallSamples)) +
                " m or make the domain smaller");
   }
+  // A shape past its own cap is named by check_bodies, with the resolution that fits.
+  for (const BodySpec& b : s.bodies)
+    if (shape_size(b).tets > scene::kMaxBodyTets) return;
   if (z.bytes() > available_bytes) {
     const bool fluid = z.fluid_bytes >= z.body_bytes;
     const std::string what =
