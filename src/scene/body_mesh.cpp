@@ -136,7 +136,8 @@ TetMesh read_mesh_file(const BodySpec& b, const std::string& at, const std::stri
 ShapeSize shape_size(const BodySpec& b) {
   if (b.shape == BodyShape::Mesh) return {};
   const ShapeCells c = shape_cells(b);
-  return {double(c.nx + 1) * double(c.ny + 1) * double(c.nz + 1), double(c.tets)};
+  // In doubles before the + 1: a hostile resolution makes nx INT_MAX (found by UBSan).
+  return {(double(c.nx) + 1) * (double(c.ny) + 1) * (double(c.nz) + 1), c.tets};
 }
 
 TetMesh body_rest_mesh(const BodySpec& b, const std::string& at, const std::string& scene_file) {
