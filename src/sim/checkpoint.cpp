@@ -54,6 +54,14 @@ class Reader {
     std::memcpy(&v, p_ + at_, sizeof v);
     at_ += sizeof v;
   }
+  // A flag is a byte that must be 0 or 1: any other value in a bool is undefined behaviour
+  // (found by UBSan under the checkpoint fuzz test).
+  void value(bool& v) {
+    std::uint8_t b = 0;
+    value(b);
+    if (b > 1) fail();
+    v = b == 1;
+  }
   template <class T>
   void array(std::vector<T>& a) {
     std::uint64_t n = 0;
