@@ -95,7 +95,9 @@ void compare(const SceneSpec& scene, const Outcome& a, const Outcome& b) {
   EXPECT_LT(dn, 0.02 * spacing);
   EXPECT_EQ(b.crossed, 0);
   EXPECT_EQ(b.inside, a.inside);
-  if (a.contacts > 0) EXPECT_NEAR(double(b.contacts), double(a.contacts), 0.05 * a.contacts + 2);
+  if (a.contacts > 0) {
+    EXPECT_NEAR(double(b.contacts), double(a.contacts), 0.05 * a.contacts + 2);
+  }
 }
 
 bool cuda_or_skip(std::string& why) { return cuda_available(&why); }
