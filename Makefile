@@ -14,7 +14,7 @@ ASAN_BUILD ?= build/asan
 ASAN_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 SPHFEM_FUZZ_SLOW=20
 # What CI runs under the sanitizers (the whole suite takes hours there): the readers, their fuzz
 # tests, the limits, the output failures, and short runs of fluid and bodies coupled.
-ASAN_QUICK = FuzzReaders|SceneLimits|SceneErrors|SceneLoad|FemImport|IoFrame|IoSeries|RunInfo|CliOutput|Cli\.RunWritesFrames|Cli\.RunOfABodyScene|SimBodiesWithFluid|CoupleScenes\.FluidStartingInsideABodyLeavesIt
+ASAN_QUICK = FuzzReaders|SceneLimits|SceneErrors|SceneLoad|FemImport|IoFrame|IoSeries|RunInfo|CliOutput|Cli\.RunWritesFrames|Cli\.RunOfABodyScene|SimBodiesWithFluid
 
 .PHONY: deps assets configure build demo test bench clean asan-build test-asan test-asan-quick
 
