@@ -4,7 +4,9 @@
 // tests/data/fuzz/<reader>/crash_*.
 //
 // SPHFEM_FUZZ_INPUTS (default 2000) and SPHFEM_FUZZ_SECONDS (default 6) bound each reader's run;
-// SPHFEM_FUZZ_SLOW (default 2 s) is the time an input may take before it counts as a hang.
+// SPHFEM_FUZZ_SLOW (default 10 s) is the time an input may take before it counts as a hang: an
+// input takes milliseconds, but ctest runs the heavy physics tests beside this one, and under
+// that load a 3 KB input was measured at 3.7 s.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -62,7 +64,7 @@ class FuzzReaders : public ::testing::TestWithParam<Reader> {
     const double s = std::chrono::duration<double>(Clock::now() - t0).count();
     std::error_code ec;
     fs::remove(last, ec);
-    if (defect.empty() && s > env_or("SPHFEM_FUZZ_SLOW", 2.0))
+    if (defect.empty() && s > env_or("SPHFEM_FUZZ_SLOW", 10.0))
       defect = "took " + std::to_string(s) + " s";
     if (defect.empty()) return true;
     const fs::path keep =
