@@ -11,10 +11,15 @@ DEMO_OUT ?= out/default
 
 # The sanitizer build (AddressSanitizer + UndefinedBehaviorSanitizer, CPU only, own folder).
 ASAN_BUILD ?= build/asan
-ASAN_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 SPHFEM_FUZZ_SLOW=20
+# Assimp leaks inside its own loaders on some malformed files (tests/lsan.supp).
+ASAN_ENV = ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 SPHFEM_FUZZ_SLOW=20
 # What CI runs under the sanitizers (the whole suite takes hours there): the readers, their fuzz
 # tests, the limits, the output failures, and short runs of fluid and bodies coupled.
 ASAN_QUICK = FuzzReaders|SceneLimits|SceneErrors|SceneLoad|FemImport|IoFrame|IoSeries|RunInfo|CliOutput|Cli\.RunWritesFrames|Cli\.RunOfABodyScene|SimBodiesWithFluid
+# Left out: the surface reader's mutations reach an Assimp loader that asks for 64 GiB, which
+# the sanitizer's allocator aborts on (a release build gets std::bad_alloc and refuses the
+# file); how many mutations run depends on the machine's speed, so it would fail at random.
+ASAN_QUICK_EXCLUDE = FuzzReaders\.SeededMutationsAreReadOrRefusedCleanly/surface
 
 .PHONY: deps assets configure build demo test bench clean asan-build test-asan test-asan-quick
 
@@ -48,7 +53,8 @@ test-asan: asan-build
 	$(ASAN_ENV) ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS)
 
 test-asan-quick: asan-build
-	$(ASAN_ENV) ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS) -R '$(ASAN_QUICK)'
+	$(ASAN_ENV) ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS) -R '$(ASAN_QUICK)' \
+	  -E '$(ASAN_QUICK_EXCLUDE)'
 
 bench: build
 	$(BUILD)/bin/sphfem bench --out bench/results
