@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <vector>
 
 #include "sphfem/scene/load.h"
@@ -65,6 +67,98 @@ TEST(CoupleLightBody, LightBallRisesAndComesToRestFloating) {
   EXPECT_LT(late, mid * 1.5) << "the motion grows instead of decaying";
   EXPECT_EQ(crossed, 0);
 }
+
+// A light cloth (0.2 kg/m2, pinned along two opposite edges) under a falling column of water
+// 55 times heavier, in both ray-traced modes. Disabled: it fails in both modes, with either
+// exchange (the open item of docs/validation.md, "A light cloth under a falling column"); run
+// it by hand with --gtest_also_run_disabled_tests (SPHFEM_TEST_IMPLICIT_EXCHANGE=1 for the
+// implicit exchange, SPHFEM_TEST_TRACE=1 for a line per step). The water lands at about 1 m/s; the
+// cloth sags, holds it and comes to rest. Asserted: no node or particle is shot off (nodes at most
+// 3 m/s, the water at most 2 m/s), the water at rest on the cloth does not keep pressing into it
+// (every particle under 0.5 m/s over the last 0.1 s), kinetic energy decays at the end, and
+// nothing crosses the cloth.
+class CoupleLightCloth : public ::testing::TestWithParam<bool> {};
+
+TEST_P(CoupleLightCloth, DISABLED_SagsUnderAFallingColumnWithoutJitter) {
+  const bool near_surface = GetParam();
+  nlohmann::json j = nlohmann::json::parse(R"({
+    "simulation": {"solver": "dfsph", "dt_max": 0.002},
+    "fluid": {"particle_radius": 0.005, "viscosity": 1e-5,
+              "blocks": [{"min": [0.11, 0.2, 0.11], "max": [0.19, 0.3, 0.19]}]},
+    "domain": {"min": [0, 0, 0], "max": [0.3, 0.35, 0.3]},
+    "bodies": [{"name": "cloth", "shape": "cloth", "position": [0.15, 0.15, 0.15],
+                "size": [0.24, 0.01, 0.24], "thickness": 0.004, "resolution": 24,
+                "material": {"density": 50, "young": 1e5, "poisson": 0.3, "damping_beta": 0.001},
+                "pinned": {"boxes": [{"min": [0, 0, 0], "max": [0.035, 0.3, 0.3]},
+                                     {"min": [0.265, 0, 0], "max": [0.3, 0.3, 0.3]}]}}]
+  })");
+  j["coupling"]["near_surface_density"] = near_surface;
+  if (const char* e = std::getenv("SPHFEM_TEST_IMPLICIT_EXCHANGE"))
+    j["coupling"]["implicit_exchange"] = std::string(e) == "1";
+  const SceneSpec scene = parse_scene(j, "cloth.json");
+  validate_scene(scene, "cloth.json");
+  Simulation sim(scene, Backend::Cpu);
+  const double duration = 0.5, settle = 0.4;
+  double node_max = 0, fluid_max = 0, fluid_late = 0, e_mid = 0, e_late = 0;
+  long crossed = 0;
+  while (sim.time() < duration - 1e-9) {
+    const double dt = sim.step(duration - sim.time()).dt;
+    BodySnapshot b;
+    sim.bodies()->snapshot(b);
+    FluidSnapshot f;
+    sim.snapshot(f);
+    double vn = 0, vf = 0, e = sim.bodies()->kinetic_energy();
+    for (const Vec3& v : b.v) vn = std::max(vn, double(norm(v)));
+    // The water on the cloth: above its lowest node less a particle diameter (what runs off
+    // its free edges falls to the floor, at up to 2 m/s).
+    double low = 1e9, on = 0;
+    for (const Vec3& x : b.x) low = std::min(low, double(x.y));
+    for (int i = 0; i < f.n; ++i) {
+      vf = std::max(vf, double(norm(f.v[i])));
+      if (double(f.x[i].y) > low - 0.01) on = std::max(on, double(norm(f.v[i])));
+    }
+    node_max = std::max(node_max, vn);
+    fluid_max = std::max(fluid_max, on);
+    if (sim.time() > settle) fluid_late = std::max(fluid_late, on);
+    if (sim.time() > 0.3 && sim.time() <= settle) e_mid = std::max(e_mid, e);
+    if (sim.time() > settle) e_late = std::max(e_late, e);
+    const RayCouplingStats& st = sim.coupling()->stats();
+    if (std::getenv("SPHFEM_TEST_TRACE")) {
+      // Total energy: kinetic, gravitational (g = 9.81 down y) and elastic.
+      double E = sim.bodies()->kinetic_energy() + sim.bodies()->elastic_energy();
+      for (int i = 0; i < b.n; ++i)
+        E += 9.81 * double(sim.bodies_model().mass[std::size_t(i)]) * double(b.x[i].y);
+      const double mp = double(sim.fluid_model().params.mass);
+      for (int i = 0; i < f.n; ++i)
+        E += mp * (0.5 * double(norm2(f.v[i])) + 9.81 * double(f.x[i].y));
+      std::printf("E %.6f ", E);
+      int k = 0;
+      for (int i = 0; i < f.n; ++i)
+        if (norm(f.v[i]) > norm(f.v[k])) k = i;
+      std::printf(
+          "t %.4f dt %.2e node %.3f fluid %.3f at (%.3f %.3f %.3f) v (%.2f %.2f %.2f) "
+          "contacts %ld rounds %ld cg %ld\n",
+          sim.time(), dt, vn, vf, f.x[k].x, f.x[k].y, f.x[k].z, f.v[k].x, f.v[k].y, f.v[k].z,
+          st.contacts, st.joint_rounds, st.joint_iterations);
+    }
+    crossed += st.crossed;
+    sim.coupling()->reset_stats();
+  }
+  std::printf(
+      "near-surface %d: fastest node %.3f m/s, fastest particle %.3f m/s (%.3f after %.1f s); "
+      "cloth kinetic energy 0.3-0.4 s %.3g J, 0.4-0.5 s %.3g J; %ld crossed\n",
+      int(near_surface), node_max, fluid_max, fluid_late, settle, e_mid, e_late, crossed);
+  EXPECT_LT(node_max, 3.0);
+  EXPECT_LT(fluid_max, 2.0);
+  EXPECT_LT(fluid_late, 0.5);
+  EXPECT_LE(e_late, e_mid * 1.2);
+  EXPECT_EQ(crossed, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Modes, CoupleLightCloth, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& i) {
+                           return std::string(i.param ? "NearSurfaceDensity" : "PaperMode");
+                         });
 
 }  // namespace
 }  // namespace sphfem

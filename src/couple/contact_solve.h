@@ -13,10 +13,13 @@
 // so the nodes satisfy the symmetric positive definite system
 //   (M + m_p W P W^T) dV = m_p W P (u* - u0),
 // which conjugate gradients solve matrix-free over the nodes the contacts touch (Jacobi
-// preconditioned). An outer loop drops contacts that would pull and adds those pushed into
-// approach, until the set no longer changes. Node sums run over a list sorted by node in a
-// fixed order, and every particle gets exactly -J_c: momentum is exact, bits are the same on
-// any thread count.
+// preconditioned). With the bodies' step operator (NodeOperator) in place of M, A = (1 + dt
+// alpha) M + dt (dt + beta) K, the unknowns are every node of the bodies and the solve sees
+// the velocity change the next implicit step will make of the impulses: a light node held by
+// its elements is not taken for a free one (docs/design.md). An outer loop drops contacts that
+// would pull and adds those pushed into approach, until the set no longer changes. Node sums run
+// over a list sorted by node in a fixed order, and every particle gets exactly -J_c: momentum is
+// exact, bits are the same on any thread count.
 #pragma once
 
 #include <cstdint>
@@ -126,6 +129,12 @@ void node_diagonal(Exec& ex, const Contact* contacts, const std::uint32_t* vals,
   });
 }
 
+// Where contact c's corner j reads a node vector: its run (slot), or with slot null the
+// node itself (vectors over every node, as the solve with the bodies' operator keeps them).
+SPHFEM_HD int node_slot(const Contact& ct, int c, int j, const std::uint32_t* slot) {
+  return slot ? int(slot[3 * c + j]) : ct.node[j];
+}
+
 SPHFEM_HD Vec3 project(const Contact& c, const Vec3& a) {
   return c.mode == 1 ? a : c.mode == 2 ? c.n * dot(c.n, a) : Vec3();
 }
@@ -140,7 +149,8 @@ void contact_rhs(Exec& ex, Contact* contacts, int m, Real mp) {
   });
 }
 
-// t_c = m_p P_c sum_j w_cj x_j, for the node vector x (by run; immovable nodes have none).
+// t_c = m_p P_c sum_j w_cj x_j, for the node vector x (by run, or by node with slot null;
+// immovable nodes have none).
 template <class Exec>
 void contact_apply(Exec& ex, Contact* contacts, int m, const std::uint32_t* slot, const Vec3* x,
                    Real mp) {
@@ -148,14 +158,15 @@ void contact_apply(Exec& ex, Contact* contacts, int m, const std::uint32_t* slot
     Contact& ct = contacts[c];
     Vec3 a;
     for (int j = 0; j < 3; ++j)
-      if (ct.node[j] >= 0) a += x[slot[3 * c + j]] * ct.w[j];
+      if (ct.node[j] >= 0) a += x[node_slot(ct, c, j, slot)] * ct.w[j];
     ct.t = project(ct, a) * mp;
   });
 }
 
 // Per node run, in its fixed order, a sum over its contacts c of w_cj times:
-//   kMatrix: t_c, plus mass x (the matrix applied to x);  kRhs: s_c;  kImpulse: J_c.
-enum NodeSum { kMatrix, kRhs, kImpulse };
+//   kMatrix: t_c, plus mass x (the matrix applied to x);  kRhs: s_c;  kImpulse: J_c;
+//   kContact: t_c alone (the contacts' part of the matrix).
+enum NodeSum { kMatrix, kRhs, kImpulse, kContact };
 template <class Exec>
 void node_gather(Exec& ex, const Contact* contacts, const std::uint32_t* vals,
                  const std::uint32_t* first, int runs, NodeSum what, const Real* mass,
@@ -165,7 +176,7 @@ void node_gather(Exec& ex, const Contact* contacts, const std::uint32_t* vals,
     for (std::uint32_t e = first[r]; e < first[r + 1]; ++e) {
       const std::uint32_t v = vals[e];
       const Contact& ct = contacts[v / 3];
-      s += (what == kMatrix ? ct.t : what == kRhs ? ct.s : ct.J) * ct.w[v % 3];
+      s += (what == kMatrix || what == kContact ? ct.t : what == kRhs ? ct.s : ct.J) * ct.w[v % 3];
     }
     out[r] = what == kMatrix ? x[r] * mass[r] + s : s;
   });
@@ -189,7 +200,7 @@ int contact_update(Exec& ex, Contact* contacts, int m, const std::uint32_t* slot
     }
     Vec3 u = ct.u0;
     for (int j = 0; j < 3; ++j)
-      if (ct.node[j] >= 0) u += dV[slot[3 * c + j]] * ct.w[j];
+      if (ct.node[j] >= 0) u += dV[node_slot(ct, c, j, slot)] * ct.w[j];
     if (dot(u, ct.n) > tol) {
       ct.mode = ct.approaching ? 1 : 2;
       return 1.0;
@@ -208,7 +219,7 @@ Real contact_residual(Exec& ex, const Contact* contacts, int m, const std::uint3
     const Contact& ct = contacts[c];
     Vec3 u = ct.u0 + ct.J * inv_mp;
     for (int j = 0; j < 3; ++j)
-      if (ct.node[j] >= 0) u += dV[slot[3 * c + j]] * ct.w[j];
+      if (ct.node[j] >= 0) u += dV[node_slot(ct, c, j, slot)] * ct.w[j];
     if (ct.mode == 1) return norm(u - ct.target);
     const Real un = dot(u, ct.n);
     if (ct.mode == 2) return un < Real(0) ? -un : un;
@@ -223,12 +234,14 @@ void apply_to_particles(Exec& ex, const Contact* contacts, int m, Vec3* v, Real 
                [=] SPHFEM_LAMBDA(int c) { v[contacts[c].particle] -= contacts[c].J * inv_mp; });
 }
 
-// The nodes' share sum_c w_cj J_c (by run), into each set's impulse array.
+// The nodes' share sum_c w_cj J_c (by run), into each set's impulse array; nodes below
+// `from` are left out (they took theirs as a velocity change).
 template <class Exec>
 void apply_to_nodes(Exec& ex, const SurfacesView S, const std::uint32_t* keys,
-                    const std::uint32_t* first, int runs, const Vec3* impulse_of_run) {
+                    const std::uint32_t* first, int runs, const Vec3* impulse_of_run, int from) {
   parallel_for(ex, runs, [=] SPHFEM_LAMBDA(int r) {
     const int node = int(keys[first[r]]);
+    if (node < from) return;
     int s = 0;
     while (s + 1 < S.count && node >= S.set[s + 1].node_base) ++s;
     Vec3* impulse = S.set[s].impulse;

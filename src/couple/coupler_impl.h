@@ -9,6 +9,7 @@
 
 #include "couple/contact_solve.h"
 #include "couple/stages.h"
+#include "fem/stages.h"
 #include "sphfem/core/memory.h"
 #include "sphfem/couple/coupler.h"
 
@@ -27,8 +28,10 @@ class CouplerT final : public Coupler {
     first_ = Buffer<std::uint32_t>(s);
     contacts_ = Buffer<couple::Contact>(s);
     slot_ = Buffer<std::uint32_t>(s);
-    for (Buffer<Real>* b : {&mass_, &diag_}) *b = Buffer<Real>(s);
-    for (Buffer<Vec3>* b : {&x_, &r_, &z_, &p_, &q_}) *b = Buffer<Vec3>(s);
+    for (Buffer<Real>* b : {&mass_, &diag_, &blocks_, &scratch6_}) *b = Buffer<Real>(s);
+    for (Buffer<Vec3>* b : {&x_, &r_, &z_, &p_, &q_, &xf_, &rf_, &zf_, &pf_, &qf_})
+      *b = Buffer<Vec3>(s);
+    pinvf_ = Buffer<fem::Sym3>(s);
     travel_ = Buffer<Real>(s);
     surface_v_ = Buffer<Vec3>(s);
     body_first_ = Buffer<int>(s);
@@ -60,7 +63,7 @@ class CouplerT final : public Coupler {
   }
 
   CoupleStats apply(const HitArrays& hits, const FluidArrays& fluid,
-                    const std::vector<CoupleSurface>& surfaces) override {
+                    const std::vector<CoupleSurface>& surfaces, NodeOperator* bodies) override {
     const couple::SurfacesView S = view(surfaces);
     check(hits, fluid);
     CoupleStats stats;
@@ -113,25 +116,32 @@ class CouplerT final : public Coupler {
     const Real fastest =
         reduce_max(ex_, m, Real(0), [=] SPHFEM_LAMBDA(int k) -> Real { return norm(c[k].u0); });
     const Real tol = std::max(Real(kTolerance) * fastest, Real(1e-9));
-    Vec3* dV = x_.data();
+    // With the bodies' operator the node vectors span every node (read by node, no slot).
+    const bool full = bodies && bodies->nodes() > 0 && runs > 0;
+    if (full) prepare_full(*bodies, S.nodes);
+    Vec3* dV = full ? xf_.data() : x_.data();
+    const std::uint32_t* at = full ? nullptr : slot_.data();
     for (int round = 0; round < kMaxRounds; ++round) {
       couple::contact_rhs(ex_, c, m, mp);
       if (runs > 0) {
         couple::node_diagonal(ex_, c, vals_.data(), first_.data(), runs, mp, mass_.data(),
                               diag_.data());
-        stats.iterations += solve_nodes(c, m, runs, mp);
+        stats.iterations +=
+            full ? solve_full(*bodies, c, m, runs, S.nodes, mp) : solve_nodes(c, m, runs, mp);
       }
-      couple::contact_apply(ex_, c, m, slot_.data(), dV, mp);
+      couple::contact_apply(ex_, c, m, at, dV, mp);
       ++stats.rounds;
-      if (couple::contact_update(ex_, c, m, slot_.data(), dV, tol) == 0) break;
+      if (couple::contact_update(ex_, c, m, at, dV, tol) == 0) break;
     }
     stats.residual =
-        double(couple::contact_residual(ex_, c, m, slot_.data(), runs > 0 ? dV : nullptr, inv_mp));
+        double(couple::contact_residual(ex_, c, m, at, runs > 0 ? dV : nullptr, inv_mp));
     couple::apply_to_particles(ex_, c, m, fluid.v, inv_mp);
     if (runs > 0) {
       couple::node_gather(ex_, c, vals_.data(), first_.data(), runs, couple::kImpulse, nullptr,
                           nullptr, r_.data());
-      couple::apply_to_nodes(ex_, S, keys_.data(), first_.data(), runs, r_.data());
+      couple::apply_to_nodes(ex_, S, keys_.data(), first_.data(), runs, r_.data(),
+                             full ? bodies->nodes() : 0);
+      if (full) bodies->add_velocity(dV);
     }
     exec_sync(ex_);
 
@@ -187,7 +197,89 @@ class CouplerT final : public Coupler {
     return it;
   }
 
+  // The bodies' diagonal blocks of A (fixed over the rounds) and the node vectors over all
+  // N nodes of the sets.
+  void prepare_full(NodeOperator& A, int N) {
+    if (A.nodes() > N)
+      throw std::invalid_argument("Coupler::apply: the bodies' operator spans " +
+                                  std::to_string(A.nodes()) + " nodes, the surface sets " +
+                                  std::to_string(N) + "; the bodies must be the first set");
+    grow(blocks_, 6 * A.nodes());
+    grow(pinvf_, N);
+    for (Buffer<Vec3>* b : {&xf_, &rf_, &zf_, &pf_, &qf_}) grow(*b, N);
+    A.diagonal(blocks_.data());
+  }
+
+  // Preconditioned CG on (A + m_p W P W^T) dV = m_p W P (u* - u0) over every node: A the
+  // bodies' step operator on its nodes, the lumped mass on any other node a contact moves
+  // (nodes of the sets beyond the bodies'). Block-Jacobi preconditioner: A's diagonal blocks
+  // plus the contacts' m_p sum w^2. Returns its iterations; the solution is in xf_.
+  int solve_full(NodeOperator& A, couple::Contact* c, int m, int runs, int N, Real mp) {
+    const int na = A.nodes();
+    const std::uint32_t *vals = vals_.data(), *first = first_.data(), *keys = keys_.data();
+    Vec3 *x = xf_.data(), *r = rf_.data(), *z = zf_.data(), *p = pf_.data(), *q = qf_.data();
+    Vec3* run = r_.data();  // per-run sums
+    const Real *mass = mass_.data(), *diag = diag_.data();
+    const Real* blocks = blocks_.data();
+    fem::Sym3* pinv = pinvf_.data();
+    // The preconditioner's blocks: A's (bodies' nodes), then each run's contacts and, beyond
+    // the bodies, its lumped mass; a node with neither is masked out.
+    Real* b6 = scratch6(N);
+    parallel_for(ex_, N, [=] SPHFEM_LAMBDA(int i) {
+      for (int k = 0; k < 6; ++k) b6[6 * i + k] = i < na ? blocks[6 * i + k] : Real(0);
+      x[i] = Vec3();
+      r[i] = Vec3();
+    });
+    couple::node_gather(ex_, c, vals, first, runs, couple::kRhs, mass, nullptr, run);
+    parallel_for(ex_, runs, [=] SPHFEM_LAMBDA(int k) {
+      const int i = int(keys[first[k]]);
+      const Real d = diag[k] - mass[k] + (i < na ? Real(0) : mass[k]);
+      for (int a = 0; a < 3; ++a) b6[6 * i + a] += d;
+      r[i] = run[k];
+    });
+    double rz = reduce_sum(ex_, N, [=] SPHFEM_LAMBDA(int i) -> double {
+      const Real* b = b6 + 6 * i;
+      pinv[i] = b[0] > Real(0) ? fem::inverse_block(b) : fem::Sym3{0, 0, 0, 0, 0, 0};
+      z[i] = pinv[i] * r[i];
+      p[i] = z[i];
+      return double(dot(r[i], z[i]));
+    });
+    const double target = kCgTolerance * kCgTolerance * rz;
+    int it = 0;
+    while (rz > target && rz > 0 && it < kMaxCg) {
+      A.apply(p, q);
+      if (N > na) parallel_for(ex_, N - na, [=] SPHFEM_LAMBDA(int k) { q[na + k] = Vec3(); });
+      couple::contact_apply(ex_, c, m, nullptr, p, mp);
+      couple::node_gather(ex_, c, vals, first, runs, couple::kContact, nullptr, nullptr, run);
+      parallel_for(ex_, runs, [=] SPHFEM_LAMBDA(int k) {
+        const int i = int(keys[first[k]]);
+        q[i] += run[k];
+        if (i >= na) q[i] += p[i] * mass[k];
+      });
+      const double pq = reduce_sum(
+          ex_, N, [=] SPHFEM_LAMBDA(int i) -> double { return double(dot(p[i], q[i])); });
+      if (!(pq > 0)) break;
+      const Real alpha = Real(rz / pq);
+      const double rz_new = reduce_sum(ex_, N, [=] SPHFEM_LAMBDA(int i) -> double {
+        x[i] += p[i] * alpha;
+        r[i] -= q[i] * alpha;
+        z[i] = pinv[i] * r[i];
+        return double(dot(r[i], z[i]));
+      });
+      const Real beta = Real(rz_new / rz);
+      parallel_for(ex_, N, [=] SPHFEM_LAMBDA(int i) { p[i] = z[i] + p[i] * beta; });
+      rz = rz_new;
+      ++it;
+    }
+    return it;
+  }
+
  private:
+  Real* scratch6(int N) {
+    grow(scratch6_, 6 * N);
+    return scratch6_.data();
+  }
+
   template <class T>
   static void grow(Buffer<T>& b, int n) {
     if (b.size() < std::size_t(n)) b.resize(std::size_t(n) + std::size_t(n) / 4);
@@ -311,6 +403,9 @@ class CouplerT final : public Coupler {
   Buffer<couple::Contact> contacts_;
   Buffer<Real> mass_, diag_;
   Buffer<Vec3> x_, r_, z_, p_, q_;
+  Buffer<Real> blocks_, scratch6_;  // with the bodies' operator: A's blocks, the preconditioner's
+  Buffer<fem::Sym3> pinvf_;
+  Buffer<Vec3> xf_, rf_, zf_, pf_, qf_;  // node vectors over every node
   Buffer<Real> travel_;
   Buffer<Vec3> surface_v_;
   Buffer<int> body_first_;

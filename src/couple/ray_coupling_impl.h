@@ -13,8 +13,22 @@
 #include "sphfem/couple/coupler.h"
 #include "sphfem/couple/ray_coupling.h"
 #include "sphfem/fem/model.h"
+#include "sphfem/fem/solver.h"
 
 namespace sphfem {
+
+// The bodies' step operator, for the joint exchange (couple/coupler.h).
+class BodyOperator final : public NodeOperator {
+ public:
+  explicit BodyOperator(BodySolver* b) : b_(b) {}
+  int nodes() const override { return b_ ? b_->node_count() : 0; }
+  void apply(const Vec3* p, Vec3* q) override { b_->apply_step_operator(p, q); }
+  void diagonal(Real* blocks) override { b_->step_operator_diagonal(blocks); }
+  void add_velocity(const Vec3* dv) override { b_->add_velocity_change(dv); }
+
+ private:
+  BodySolver* b_;
+};
 
 template <class Exec>
 class RayCouplingT final : public RayCoupling {
@@ -183,8 +197,16 @@ class RayCouplingT final : public RayCoupling {
   void exchange(const FluidArrays& f) override {
     if (!set_.rays) return;
     // The impulse lands in the nodes' array; collect_body_impulse counts it per body.
-    const CoupleStats cs = coupler_->apply(hits(), f, surfaces_);
+    BodyOperator op(bodies_);
+    const bool implicit = set_.implicit_exchange && body_tris_ > 0 && bodies_->last_dt() > 0;
+    const CoupleStats cs = coupler_->apply(hits(), f, surfaces_, implicit ? &op : nullptr);
     stats_.contacts += cs.contacts;
+    stats_.joint_rounds += cs.rounds;
+    stats_.joint_iterations += cs.iterations;
+    // The bodies took their share as a velocity change, not through the impulse array.
+    if (implicit)
+      for (std::size_t b = 0; b < stats_.body_impulse.size() && b < cs.body_impulse.size(); ++b)
+        stats_.body_impulse[b] += cs.body_impulse[b];
   }
 
   // Public only because nvcc does not allow device lambdas in private member functions.

@@ -96,6 +96,7 @@ class BodySolverT final : public BodySolver {
       has_impulses_ = false;
     });
     t_ += dt_in;
+    last_dt_ = dt;
     ++steps_;
     ++prof_.steps;
     prof_.cg_iterations += info.cg_iterations;
@@ -195,6 +196,32 @@ class BodySolverT final : public BodySolver {
     exec_sync(ex_);
   }
 
+  void apply_step_operator(const Vec3* p, Vec3* q) override {
+    fem::element_stiffness(ex_, elements(), p, P_.data(), last_dt_, fe_.data());
+    fem::apply_nodes(ex_, response_nodes(), fe_.data(), p, last_dt_, q);
+    exec_sync(ex_);
+  }
+
+  void step_operator_diagonal(Real* blocks) override {
+    fem::diagonal_blocks(ex_, elements(), response_nodes(), P_.data(), last_dt_, blocks);
+    exec_sync(ex_);
+  }
+
+  void add_velocity_change(const Vec3* dv) override {
+    const std::uint8_t* pinned = pinned_.data();
+    Vec3* v = v_.data();
+    Vec3* x = x_.data();
+    const Real dt = last_dt_;
+    parallel_for(ex_, n_, [=] SPHFEM_LAMBDA(int i) {
+      if (pinned[i]) return;
+      v[i] += dv[i];
+      x[i] += dv[i] * dt;
+    });
+    exec_sync(ex_);
+  }
+
+  double last_dt() const override { return double(last_dt_); }
+
   BodyArrays arrays() override {
     BodyArrays a;
     a.space = Exec::kSpace;
@@ -253,6 +280,14 @@ class BodySolverT final : public BodySolver {
     nv.pinned = pinned_.data();
     nv.inc_start = inc_start_.data();
     nv.inc = inc_.data();
+    return nv;
+  }
+
+  // The nodes without mass-proportional damping (the response to a contact impulse).
+  fem::NodeView response_nodes() {
+    fem::NodeView nv = nodes();
+    if (zero_alpha_.size() != std::size_t(n_)) upload(zero_alpha_, std::vector<Real>(n_, Real(0)));
+    nv.alpha = zero_alpha_.data();
     return nv;
   }
 
@@ -321,12 +356,13 @@ class BodySolverT final : public BodySolver {
   Exec ex_;
   int n_ = 0, ne_ = 0;
   double t_ = 0;
+  Real last_dt_ = 0;
   long steps_ = 0;
   bool warm_ = false, has_forces_ = false, has_impulses_ = false, impulses_exposed_ = false;
   Buffer<Tet> tets_;
   Buffer<Tri> surface_;
   Buffer<Vec3> grad_;
-  Buffer<Real> mu_vol_, lambda_vol_, beta_, mass_, alpha_;
+  Buffer<Real> mu_vol_, lambda_vol_, beta_, mass_, alpha_, zero_alpha_;
   Buffer<std::uint8_t> pinned_, zero_flags_;
   Buffer<int> inc_start_, inc_;
   Buffer<Vec3> x_, v_, dv_, delta_, u_, b_, r_, z_, p_, q_, impulse_, staging_, fext_;

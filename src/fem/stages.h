@@ -88,6 +88,30 @@ void rotations(Exec& ex, const ElementView e, const Vec3* x, const Vec3* v, Real
 
 // Inverse diagonal blocks of A = (1 + dt alpha) M + dt (dt + beta) K_R; zero on pinned nodes,
 // which masks them out of CG.
+// Node i's diagonal block of A = (1 + dt alpha) M + dt (dt + beta) K_R (xx, yy, zz, xy, xz, yz).
+SPHFEM_HD void diagonal_of_a(const ElementView& e, const NodeView& nv, const Vec3* P, Real dt,
+                             int i, Real* b) {
+  const Real m = nv.mass[i] * (Real(1) + dt * nv.alpha[i]);
+  b[0] = b[1] = b[2] = m;
+  b[3] = b[4] = b[5] = Real(0);
+  for (int k = nv.inc_start[i]; k < nv.inc_start[i + 1]; ++k) {
+    const int t = nv.inc[k] >> 2, a = nv.inc[k] & 3;
+    const Real s = dt * (dt + e.beta[t]);
+    Real d[6];
+    diagonal_block(rotated_gradient(P, t, a), s * e.mu_vol[t], s * e.lambda_vol[t], d);
+    for (int c = 0; c < 6; ++c) b[c] += d[c];
+  }
+}
+
+// The inverse of a symmetric 3x3 block (xx, yy, zz, xy, xz, yz), by cofactors.
+SPHFEM_HD Sym3 inverse_block(const Real* b) {
+  const Real c00 = b[1] * b[2] - b[5] * b[5], c11 = b[0] * b[2] - b[4] * b[4];
+  const Real c22 = b[0] * b[1] - b[3] * b[3], c01 = b[4] * b[5] - b[3] * b[2];
+  const Real c02 = b[3] * b[5] - b[1] * b[4], c12 = b[3] * b[4] - b[0] * b[5];
+  const Real inv = Real(1) / (b[0] * c00 + b[3] * c01 + b[4] * c02);
+  return Sym3{c00 * inv, c11 * inv, c22 * inv, c01 * inv, c02 * inv, c12 * inv};
+}
+
 template <class Exec>
 void preconditioner(Exec& ex, const ElementView e, const NodeView nv, const Vec3* P, Real dt,
                     Sym3* pinv) {
@@ -96,21 +120,20 @@ void preconditioner(Exec& ex, const ElementView e, const NodeView nv, const Vec3
       pinv[i] = Sym3{0, 0, 0, 0, 0, 0};
       return;
     }
-    const Real m = nv.mass[i] * (Real(1) + dt * nv.alpha[i]);
-    Real b[6] = {m, m, m, 0, 0, 0};
-    for (int k = nv.inc_start[i]; k < nv.inc_start[i + 1]; ++k) {
-      const int t = nv.inc[k] >> 2, a = nv.inc[k] & 3;
-      const Real s = dt * (dt + e.beta[t]);
-      Real d[6];
-      diagonal_block(rotated_gradient(P, t, a), s * e.mu_vol[t], s * e.lambda_vol[t], d);
-      for (int c = 0; c < 6; ++c) b[c] += d[c];
-    }
-    // Symmetric 3x3 inverse by cofactors.
-    const Real c00 = b[1] * b[2] - b[5] * b[5], c11 = b[0] * b[2] - b[4] * b[4];
-    const Real c22 = b[0] * b[1] - b[3] * b[3], c01 = b[4] * b[5] - b[3] * b[2];
-    const Real c02 = b[3] * b[5] - b[1] * b[4], c12 = b[3] * b[4] - b[0] * b[5];
-    const Real inv = Real(1) / (b[0] * c00 + b[3] * c01 + b[4] * c02);
-    pinv[i] = Sym3{c00 * inv, c11 * inv, c22 * inv, c01 * inv, c02 * inv, c12 * inv};
+    Real b[6];
+    diagonal_of_a(e, nv, P, dt, i, b);
+    pinv[i] = inverse_block(b);
+  });
+}
+
+// The diagonal blocks of A, 6 values per node (0 on pinned nodes).
+template <class Exec>
+void diagonal_blocks(Exec& ex, const ElementView e, const NodeView nv, const Vec3* P, Real dt,
+                     Real* blocks) {
+  parallel_for(ex, nv.n, [=] SPHFEM_LAMBDA(int i) {
+    Real b[6] = {0, 0, 0, 0, 0, 0};
+    if (!nv.pinned[i]) diagonal_of_a(e, nv, P, dt, i, b);
+    for (int c = 0; c < 6; ++c) blocks[6 * i + c] = b[c];
   });
 }
 

@@ -9,6 +9,7 @@ RayCouplingSettings ray_coupling_settings(const SceneSpec& scene) {
   cs.rays = scene.coupling.method == CouplingMethod::RayTraced;
   // The baseline's samples stand for the bodies; the tank keeps its own samples.
   cs.near_surface = cs.rays && scene.coupling.near_surface_density;
+  cs.implicit_exchange = scene.coupling.implicit_exchange;
   cs.skin = Real(scene.coupling.skin * scene.fluid.particle_radius);
   cs.tank = cs.rays && scene.coupling.tank_rays;
   cs.tank_lo = Vec3(scene.domain.lo);

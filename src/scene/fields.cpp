@@ -560,6 +560,13 @@ const ObjectTable& coupling_table() {
                    "(from the distance to the closest point), and its pressure force, so fluid "
                    "next to a body keeps its rest density; the force goes back to the face's "
                    "nodes.")
+          .boolean("implicit_exchange", &CouplingSpec::implicit_exchange,
+                   "Ray-traced coupling: the joint momentum exchange meets each body through "
+                   "the operator of its implicit step, (1 + dt alpha) M + dt (dt + beta) K, so "
+                   "a light node held by its elements is not taken for a free one, and the "
+                   "nodes take the solve's velocity change at once. Experimental: it does not "
+                   "yet settle a light cloth under a water column (docs/validation.md). "
+                   "`false`: free nodes of their lumped masses, as in the paper.")
           .boolean("tank_rays", &CouplingSpec::tank_rays,
                    "Ray-cast the tank's six faces too, as static colliders of infinite mass, "
                    "so no particle ever crosses a wall.")

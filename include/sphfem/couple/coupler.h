@@ -74,6 +74,22 @@ CoupleSurface body_surface(const BodyArrays& arrays, const BodiesModel& model,
 CoupleSurface static_surface(MemSpace space, int nodes, const Vec3* x, int triangles,
                              const Tri* tri, ContactCoeffs coeffs);
 
+// The bodies' response to impulses over a step, for the joint solve (optional): q = A p and
+// A's 3x3 diagonal blocks (xx, yy, zz, xy, xz, yz), over the first nodes() nodes of the
+// surface sets' numbering, in the coupler's memory space; 0 rows on pinned nodes. With it the
+// solve's node matrix is A in place of the lumped masses M (src/couple/contact_solve.h), and
+// its outcome reaches those nodes as the velocity change dV = A^-1 W J (add_velocity) instead
+// of impulses: the response the solve promised the particles, whatever the next step's dt
+// (impulses into a next step of smaller dt, a softer A, shot light nodes off at 17 m/s).
+class NodeOperator {
+ public:
+  virtual ~NodeOperator() = default;
+  virtual int nodes() const = 0;
+  virtual void apply(const Vec3* p, Vec3* q) = 0;
+  virtual void diagonal(Real* blocks) = 0;
+  virtual void add_velocity(const Vec3* dv) = 0;
+};
+
 struct CoupleStats {
   int contacts = 0;     // particles with a hit
   int faces = 0;        // distinct faces hit
@@ -107,9 +123,11 @@ class Coupler {
   // contact_solve.h): each particle with a hit gets -J_c (fluid.v changes), the face's nodes
   // +J_c by the barycentric weights of its hit (added to impulse), so that every contact meets
   // its restitution and slip law at once. Which side a particle is on is taken from its
-  // position against the face's plane, so call it after the drift.
+  // position against the face's plane, so call it after the drift. `bodies`: the bodies'
+  // step operator (null: free nodes of their lumped masses).
   virtual CoupleStats apply(const HitArrays& hits, const FluidArrays& fluid,
-                            const std::vector<CoupleSurface>& surfaces) = 0;
+                            const std::vector<CoupleSurface>& surfaces,
+                            NodeOperator* bodies = nullptr) = 0;
 };
 
 // Throws std::runtime_error when the backend is not usable here (e.g. CUDA without a GPU).

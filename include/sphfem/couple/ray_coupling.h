@@ -36,6 +36,9 @@ struct RayCouplingSettings {
   // within `support` (the kernel's radius) goes to the fluid, and the pressure it exerts
   // there returns to the face's nodes.
   bool near_surface = false;
+  // The joint exchange meets the bodies through their step operator (Coupler::apply's
+  // NodeOperator) rather than their lumped node masses.
+  bool implicit_exchange = false;
   Real support = 0;
   Real skin = 0;  // m, kept between a particle and the surface it hits
   bool tank = true;
@@ -52,6 +55,7 @@ struct RayCouplingStats {
   long contacts = 0;   // particle-face hits that went to the coupler
   long crossed = 0;    // particles whose displacement crossed a body surface (goal: 0)
   long corrected = 0;  // contacts found after the drift and put back in front of the face
+  long joint_rounds = 0, joint_iterations = 0;  // the joint exchange's active-set rounds, CG
   int rebuilds = 0;
   long near_surface = 0;     // particle-steps with a body surface within the kernel's support
   double ms_leak_check = 0;  // the exact test's first pass (a part of contact_fix)

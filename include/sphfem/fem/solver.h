@@ -91,6 +91,20 @@ class BodySolver {
   virtual void load(const BodyState& in) = 0;
 
   virtual BodyArrays arrays() = 0;
+
+  // The body's response to an impulse J over the last step, dV = A^-1 J with
+  // A = M + dt (dt + beta) K_R (the implicit step's operator with its rotations and dt, less
+  // the mass-proportional damping, which would take momentum): q = A p over all nodes, 0 on
+  // pinned ones; its 3x3 diagonal blocks (xx, yy, zz, xy, xz, yz per node); and the step's
+  // share of dv on the free nodes, v += dv and x += dt dv (x_new - x_old = dt v_new stays
+  // true, as the implicit step with the impulse in it would give). Arrays in the solver's
+  // memory space. The coupling's joint solve meets the
+  // body through them: a light node held by its elements is not a free one (docs/design.md).
+  virtual void apply_step_operator(const Vec3* p, Vec3* q) = 0;
+  virtual void step_operator_diagonal(Real* blocks) = 0;
+  virtual void add_velocity_change(const Vec3* dv) = 0;
+  // dt of the last step (0 before the first).
+  virtual double last_dt() const = 0;
   virtual const BodyProfile& profile() const = 0;
   virtual void reset_profile() = 0;
 };

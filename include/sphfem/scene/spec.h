@@ -131,6 +131,7 @@ struct CouplingSpec {
   CouplingMethod method = CouplingMethod::RayTraced;
   double skin = 0.25;                // fraction of the particle radius kept off a surface
   bool near_surface_density = true;  // add the kernel mass missing beyond a body's surface
+  bool implicit_exchange = false;    // the joint exchange sees the bodies' implicit response
   bool tank_rays = true;             // the tank's faces join the ray cast as static colliders
   double rebuild_quality = 2.0;      // rebuild a BVH when its box area grows by this factor
   double wall_restitution = 0.0;     // the tank's faces (static colliders)
