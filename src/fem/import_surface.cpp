@@ -30,12 +30,31 @@ std::array<double, 3> key_of(const aiVector3D& p) {
   return {double(p.x) + 0.0, double(p.y) + 0.0, double(p.z) + 0.0};
 }
 
-// In an ASCII PLY each element is a line of its properties; a list's count must fit on its line
-// (Assimp takes a count of 2^31 as given and spends minutes on it: found by fuzzing).
-void check_ascii_ply_lists(const std::string& path, const std::string& data, std::size_t end) {
+// The bytes a PLY property takes at least: its type's size in a binary file (a list, its count's
+// size), a value and a separator in an ASCII one; 0 for a type Assimp does not know.
+std::size_t ply_type_size(const std::string& type) {
+  static const std::map<std::string, std::size_t> sizes = {
+      {"char", 1},   {"int8", 1},    {"uchar", 1},  {"uint8", 1},  {"short", 2}, {"int16", 2},
+      {"ushort", 2}, {"uint16", 2},  {"int", 4},    {"int32", 4},  {"uint", 4},  {"uint32", 4},
+      {"float", 4},  {"float32", 4}, {"double", 8}, {"float64", 8}};
+  const auto it = sizes.find(type);
+  return it == sizes.end() ? 0 : it->second;
+}
+
+// Checks a PLY header against the file before Assimp reads it (`end` is where end_header is):
+// - every line is a header line (Assimp loops forever over one it does not know);
+// - no element is declared twice (Assimp wrote past its array);
+// - every element count is a number whose elements fit in the bytes after the header (Assimp
+//   allocates for the count it is given: "element face 4294967295" asked for 64 GiB);
+// - in an ASCII body, each list's count fits on its line (Assimp takes a count of 2^31 as given
+//   and spends minutes on it).
+// All four were found by fuzzing.
+void check_ply_header(const std::string& path, const std::string& data, std::size_t end) {
   struct Element {
-    long count = 0;
-    std::vector<bool> list;  // per property
+    std::string name, count_text;
+    double count = 0;
+    std::vector<bool> list;   // per property
+    double binary_bytes = 0;  // at least, per element
   };
   std::vector<Element> elements;
   bool ascii = false;
@@ -46,25 +65,59 @@ void check_ascii_ply_lists(const std::string& path, const std::string& data, std
     words >> key >> word;
     if (key == "format") ascii = word == "ascii";
     if (key == "element") {
+      // Assimp sizes an element's array by its first declaration and fills it from every one:
+      // "element vertex 4" then "element vertex 8" wrote past the end of the heap block.
+      for (const Element& e : elements)
+        if (e.name == word)
+          throw MeshError(path, "the PLY header declares the element '" + word + "' twice",
+                          kExportHint);
       elements.push_back({});
-      words >> elements.back().count;
+      elements.back().name = word;
+      words >> elements.back().count_text;
     }
-    if (key == "property" && !elements.empty()) elements.back().list.push_back(word == "list");
-    // Assimp loops forever over a header line it does not know (found by fuzzing).
+    if (key == "property" && !elements.empty()) {
+      Element& e = elements.back();
+      e.list.push_back(word == "list");
+      if (word == "list") words >> word;  // a list takes its count's bytes at least
+      e.binary_bytes += double(ply_type_size(word));
+    }
     static const char* const known[] = {"ply",     "format",   "comment", "obj_info",
                                         "element", "property", ""};
     if (std::find(std::begin(known), std::end(known), key) == std::end(known))
       throw MeshError(path, "the PLY header has a line that is not a header line ('" + key + "')",
                       kExportHint);
   }
+
   const std::size_t body_at = data.find('\n', end);
+  const double body = body_at == std::string::npos ? 0.0 : double(data.size() - body_at - 1);
+  double needed = 0;  // bytes the elements take at least
+  for (Element& e : elements) {
+    const std::string& c = e.count_text;
+    if (c.empty() || c.size() > 20 || c.find_first_not_of("0123456789") != std::string::npos)
+      throw MeshError(path,
+                      "the PLY header's element '" + e.name + "' has no count ('" + c +
+                          "' is not a whole number)",
+                      kExportHint);
+    e.count = std::strtod(c.c_str(), nullptr);
+    // ASCII: a value and a space or a line break per property (the last line may lack its
+    // break); either way at least one byte per element.
+    const double each = std::max(1.0, ascii ? 2.0 * double(e.list.size()) : e.binary_bytes);
+    needed += e.count * each;
+    if (needed > body + 1)
+      throw MeshError(path,
+                      "the PLY header announces " + c + " '" + e.name +
+                          "' elements, more than the " + std::to_string(std::size_t(body)) +
+                          " bytes after the header can hold (is the file cut short?)",
+                      kExportHint);
+  }
   if (!ascii || body_at == std::string::npos) return;
-  std::istringstream body(data.substr(body_at + 1));
+
+  std::istringstream lines(data.substr(body_at + 1));
   for (const Element& e : elements)
-    for (long i = 0; i < e.count; ++i) {
+    for (double i = 0; i < e.count; ++i) {
       std::string line;
       do {
-        if (!std::getline(body, line)) return;  // a file cut short Assimp reports itself
+        if (!std::getline(lines, line)) return;  // a file cut short Assimp reports itself
       } while (line.find_first_not_of(" \t\r") == std::string::npos);
       std::istringstream words(line);
       std::vector<std::string> tokens;
@@ -88,6 +141,20 @@ void check_ascii_ply_lists(const std::string& path, const std::string& data, std
     }
 }
 
+// Where the PLY header's end_header line starts, or npos. It must be a line of its own: Assimp
+// loops forever over a header whose only "end_header" ends a comment (found by fuzzing).
+std::size_t find_end_header(const std::string& data) {
+  for (std::size_t at = 0; at < data.size();) {
+    const std::size_t nl = std::min(data.find('\n', at), data.size());
+    std::string line = data.substr(at, nl - at);
+    line.erase(0, std::min(line.size(), line.find_first_not_of(" \t")));
+    line.erase(line.find_last_not_of(" \t\r") + 1);  // npos + 1 == 0: all blank
+    if (line == "end_header") return at;
+    at = nl + 1;
+  }
+  return std::string::npos;
+}
+
 // Assimp's text readers can loop forever over a damaged text file (found by fuzzing: a PLY
 // header with NUL bytes and no end_header line never returns), so the text parts are checked
 // first: a PLY header must be text ending in end_header, an OBJ or ASCII STL file text.
@@ -99,13 +166,13 @@ void check_text_parts(const std::string& path) {
                  [](unsigned char c) { return char(std::tolower(c)); });
   auto is_text = [](unsigned char c) { return c == '\n' || c == '\r' || c == '\t' || c >= 32; };
   if (ext == ".ply") {
-    const std::size_t end = data.find("end_header");
+    const std::size_t end = find_end_header(data);
     if (data.compare(0, 3, "ply") != 0 || end == std::string::npos)
       throw MeshError(path, "the PLY header is damaged (no \"ply\" first or no end_header line)",
                       kExportHint);
     if (!std::all_of(data.begin(), data.begin() + long(end), is_text))
       throw MeshError(path, "the PLY header holds bytes that are not text", kExportHint);
-    check_ascii_ply_lists(path, data, end);
+    check_ply_header(path, data, end);
     return;
   }
   // A binary STL is 84 bytes and 50 per triangle, whatever its first bytes say.
