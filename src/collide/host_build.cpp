@@ -12,6 +12,15 @@ namespace {
 constexpr int kBins = 16;
 constexpr int kMedianDepth = 32;  // below this depth, splits are object medians
 
+// The bin of a centroid coordinate c in [lo, lo + kBins / scale], in range whatever the input:
+// coordinates near FLT_MAX or not finite make a centroid or its extent infinite, and then
+// (c - lo) * scale NaN or out of range, which int() does not bring back (found by fuzzing the
+// checkpoint reader: a body state loaded from a damaged checkpoint indexed bin -16).
+int bin_of(Real c, Real lo, Real scale) {
+  const Real t = (c - lo) * scale;
+  return t >= Real(0) ? (t < Real(kBins - 1) ? int(t) : kBins - 1) : 0;
+}
+
 struct Box {
   Vec3 lo = Vec3(FLT_MAX, FLT_MAX, FLT_MAX), hi = Vec3(-FLT_MAX, -FLT_MAX, -FLT_MAX);
   void grow(const Vec3& p) { lo = vmin(lo, p), hi = vmax(hi, p); }
@@ -66,7 +75,7 @@ class SahBuilder {
         int count[kBins] = {0};
         for (int k = begin; k < end; ++k) {
           const int f = prims[k];
-          const int i = std::min(kBins - 1, int((centre_[f][axis] - lo) * scale));
+          const int i = bin_of(centre_[f][axis], lo, scale);
           bins[i].grow(box_[f]);
           ++count[i];
         }
@@ -102,7 +111,7 @@ class SahBuilder {
       const Real lo = cb.lo[best_axis];
       const Real scale = Real(kBins) / (cb.hi[best_axis] - lo);
       int* m = std::partition(prims + begin, prims + end, [&](int f) {
-        return std::min(kBins - 1, int((centre_[f][best_axis] - lo) * scale)) <= best_bin;
+        return bin_of(centre_[f][best_axis], lo, scale) <= best_bin;
       });
       mid = int(m - prims);
     } else {
