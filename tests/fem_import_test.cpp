@@ -190,6 +190,65 @@ TEST_F(FemImportFiles, SurfaceFileErrorsNameTheFile) {
   EXPECT_HAS(m, "no triangles");
 }
 
+// Assimp allocates for the counts a PLY header gives (a face count of 2^32 - 1 asked for 64 GiB:
+// found by fuzzing), so the counts must fit in the bytes after the header.
+TEST_F(FemImportFiles, PlyHeaderCountsMustFitTheFile) {
+  const std::string xyz = "property float x\nproperty float y\nproperty float z\n";
+  const std::string faces = "property list uchar int vertex_indices\nend_header\n";
+  spit("faces.ply", "ply\nformat ascii 1.0\nelement vertex 3\n" + xyz +
+                        "element face 4294967295\n" + faces + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  std::string m = error_of([&] { load_surface(file("faces.ply")); });
+  EXPECT_EQ(m.rfind(file("faces.ply") + ": the PLY header announces 4294967295 'face' elements", 0),
+            0u)
+      << m;
+
+  spit("wraps.ply", "ply\nformat ascii 1.0\nelement vertex 18446744073709551615\n" + xyz +
+                        "end_header\n0 0 0\n");
+  m = error_of([&] { load_surface(file("wraps.ply")); });
+  EXPECT_HAS(m, "announces 18446744073709551615 'vertex' elements");
+
+  // Assimp never returns from a header whose only "end_header" ends a comment.
+  spit("comment.ply", "ply\nformat ascii 1.0\ncomment the end_header\n0 0 0\n");
+  m = error_of([&] { load_surface(file("comment.ply")); });
+  EXPECT_HAS(m, "no end_header line");
+
+  // Assimp sizes the vertices by the first "element vertex" and writes those of the second.
+  spit("twice.ply", "ply\nformat ascii 1.0\nelement vertex 1\n" + xyz + "element vertex 3\n" + xyz +
+                        "end_header\n0 0 0\n0 0 0\n1 0 0\n0 1 0\n");
+  m = error_of([&] { load_surface(file("twice.ply")); });
+  EXPECT_HAS(m, "declares the element 'vertex' twice");
+
+  spit("minus.ply", "ply\nformat ascii 1.0\nelement vertex -1\n" + xyz + "end_header\n");
+  m = error_of([&] { load_surface(file("minus.ply")); });
+  EXPECT_HAS(m, "element 'vertex' has no count");
+
+  // Binary: 8 vertices of 12 bytes and 6 quads of 17 bytes; 100 bytes cannot hold the vertices
+  // and 6 lists of at least their count's byte.
+  std::string body;
+  auto put = [&](const void* p, std::size_t n) { body.append(static_cast<const char*>(p), n); };
+  for (int i = 0; i < 8; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const float c = float((i >> k) & 1);
+      put(&c, 4);
+    }
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    const std::uint8_t four = 4;
+    put(&four, 1);
+    put(q, 16);
+  }
+  const std::string head =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 8\n" + xyz + "element face 6\n" + faces;
+  spit("cube.ply", head + body);
+  const SurfaceMesh s = load_surface(file("cube.ply"));
+  EXPECT_EQ(s.tris.size(), 12u);
+  EXPECT_NEAR(enclosed_volume(s.x, s.tris), 1.0, 1e-12);
+  spit("short.ply", head + body.substr(0, 100));
+  m = error_of([&] { load_surface(file("short.ply")); });
+  EXPECT_HAS(m, "announces 6 'face' elements, more than the 100 bytes after the header");
+}
+
 // --- surface checks ---
 
 TEST(FemImportCheck, OpenSurfaceCountsItsBoundaryEdges) {
