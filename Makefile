@@ -16,12 +16,14 @@ ASAN_ENV = ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests
 # What CI runs under the sanitizers (the whole suite takes hours there): the readers, their fuzz
 # tests, the limits, the output failures, and short runs of fluid and bodies coupled.
 ASAN_QUICK = FuzzReaders|SceneLimits|SceneErrors|SceneLoad|FemImport|IoFrame|IoSeries|RunInfo|CliOutput|Cli\.RunWritesFrames|Cli\.RunOfABodyScene|SimBodiesWithFluid
-# Left out: the surface reader's mutations reach an Assimp loader that asks for 64 GiB, which
-# the sanitizer's allocator aborts on (a release build gets std::bad_alloc and refuses the
-# file); how many mutations run depends on the machine's speed, so it would fail at random.
-ASAN_QUICK_EXCLUDE = FuzzReaders\.SeededMutationsAreReadOrRefusedCleanly/surface
 
-.PHONY: deps assets configure build demo test bench clean asan-build test-asan test-asan-quick
+# The readers' libFuzzer targets (fuzz/README.md): clang, coverage and the sanitizers, own folder.
+FUZZ_BUILD ?= build/fuzz
+FUZZ_SECONDS ?= 60
+FUZZ_READERS = scene surface tetgen gmsh checkpoint run_info vtu ply
+
+.PHONY: deps assets configure build demo test bench clean asan-build test-asan test-asan-quick \
+	fuzz-build fuzz
 
 deps:
 	@bash scripts/install-deps.sh
@@ -53,8 +55,31 @@ test-asan: asan-build
 	$(ASAN_ENV) ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS)
 
 test-asan-quick: asan-build
-	$(ASAN_ENV) ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS) -R '$(ASAN_QUICK)' \
-	  -E '$(ASAN_QUICK_EXCLUDE)'
+	$(ASAN_ENV) ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS) -R '$(ASAN_QUICK)'
+
+fuzz-build:
+	@bash scripts/install-deps.sh --fuzz
+	@CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DSPHFEM_FUZZ=ON -DSPHFEM_ENABLE_CUDA=OFF -DSPHFEM_ENABLE_GL=OFF -DSPHFEM_BUILD_TESTS=OFF >/dev/null
+	@cmake --build $(FUZZ_BUILD) -j$(JOBS) --target $(addprefix fuzz_,$(FUZZ_READERS))
+
+# Each reader's libFuzzer target for FUZZ_SECONDS, from its seeds and past findings
+# (tests/data/fuzz/<reader>/) and the corpus of earlier runs ($(FUZZ_BUILD)/corpus/<reader>).
+# A finding leaves its input and log in $(FUZZ_BUILD)/findings/<reader>/; all readers run, then
+# the target fails if any found something.
+fuzz: fuzz-build
+	@failed=""; for r in $(FUZZ_READERS); do \
+	  mkdir -p $(FUZZ_BUILD)/corpus/$$r $(FUZZ_BUILD)/findings/$$r; \
+	  if $(ASAN_ENV) $(FUZZ_BUILD)/fuzz/fuzz_$$r $(FUZZ_BUILD)/corpus/$$r tests/data/fuzz/$$r \
+	       -max_total_time=$(FUZZ_SECONDS) -timeout=20 -rss_limit_mb=4096 -print_final_stats=1 \
+	       -artifact_prefix=$(FUZZ_BUILD)/findings/$$r/ >$(FUZZ_BUILD)/findings/$$r/log.txt 2>&1; then \
+	    echo "fuzz_$$r: $$(grep -m1 -o 'stat::number_of_executed_units: *[0-9]*' \
+	      $(FUZZ_BUILD)/findings/$$r/log.txt | grep -o '[0-9]*$$') inputs in $(FUZZ_SECONDS) s, nothing found"; \
+	  else \
+	    echo "fuzz_$$r: FOUND a defect, see $(FUZZ_BUILD)/findings/$$r/"; failed="$$failed $$r"; \
+	  fi; \
+	done; \
+	[ -z "$$failed" ] || { echo "fuzz: findings in$$failed (fuzz/README.md says what to do)"; exit 1; }
 
 bench: build
 	$(BUILD)/bin/sphfem bench --out bench/results

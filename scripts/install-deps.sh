@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages sphfem needs to build, test and render. Idempotent: it
 # installs only what is missing and prints nothing when everything is already there.
+# `--fuzz` adds what the readers' libFuzzer targets need (`make fuzz`, fuzz/README.md).
 set -euo pipefail
 
 packages=(
@@ -13,9 +14,11 @@ packages=(
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev libglfw3-dev ffmpeg
   # The Python module (pybind11), its tests and the plotting example.
   python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib
-  # The readers' libFuzzer targets (fuzz/README.md): clang, its libFuzzer and OpenMP runtime.
-  clang libclang-rt-14-dev libomp-dev
 )
+if [ "${1:-}" = "--fuzz" ]; then
+  # The readers' libFuzzer targets: clang, its libFuzzer and OpenMP runtime.
+  packages+=(clang libclang-rt-14-dev libomp-dev)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
