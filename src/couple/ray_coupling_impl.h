@@ -61,7 +61,7 @@ class RayCouplingT final : public RayCoupling {
       face_slip_ = Buffer<Real>(sp, slip.size());
       face_slip_.upload(slip.data(), slip.size());
     }
-    if (s.tank && s.rays) build_tank();
+    if (s.rays && (s.tank || !s.obstacle_tris.empty())) build_statics();
     stats_.body_impulse.assign(s.body.size(), Vec3d());
   }
 
@@ -174,7 +174,7 @@ class RayCouplingT final : public RayCoupling {
     } else {
       fill_no_hit(n);
     }
-    if (set_.tank) {
+    if (tank_tris_ > 0) {
       cast_moving(ex_, tank_bvh_, tank_x_.data(), tank_x_.data(), n, f.x, f.v, rdt, skin,
                   SegmentHits{tank_face_.data(), tank_t_.data(), tank_u_.data(), tank_v_.data(),
                               tank_len_.data(), nullptr});
@@ -298,25 +298,42 @@ class RayCouplingT final : public RayCoupling {
     parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) { dst[i] = src[i]; });
   }
 
-  // The tank's inner faces as a static mesh: 8 corners, 2 triangles a face (no lid when the
-  // top is open).
-  void build_tank() {
-    const Vec3 lo = set_.tank_lo, hi = set_.tank_hi;
-    std::vector<Vec3> c(8);
-    for (int k = 0; k < 8; ++k)
-      c[std::size_t(k)] = Vec3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
-    // Quads by corner index (bit 0 = x, bit 1 = y, bit 2 = z).
-    const int quads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
-                             {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+  // The static set: the tank's inner faces (8 corners, 2 triangles a face, no lid when the
+  // top is open) when they are ray-cast, then the obstacles' triangles.
+  void build_statics() {
+    std::vector<Vec3> c;
     std::vector<Tri> tris;
-    for (int q = 0; q < 6; ++q) {
-      if (set_.open_top && q == 3) continue;  // y = hi
-      const int* k = quads[q];
-      tris.push_back(Tri{{k[0], k[1], k[2]}});
-      tris.push_back(Tri{{k[0], k[2], k[3]}});
+    static_offset_ = {0};
+    static_coeffs_.clear();
+    if (set_.tank) {
+      const Vec3 lo = set_.tank_lo, hi = set_.tank_hi;
+      for (int k = 0; k < 8; ++k)
+        c.push_back(Vec3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z));
+      // Quads by corner index (bit 0 = x, bit 1 = y, bit 2 = z).
+      const int quads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
+                               {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+      for (int q = 0; q < 6; ++q) {
+        if (set_.open_top && q == 3) continue;  // y = hi
+        const int* k = quads[q];
+        tris.push_back(Tri{{k[0], k[1], k[2]}});
+        tris.push_back(Tri{{k[0], k[2], k[3]}});
+      }
+      static_offset_.push_back(int(tris.size()));
+      static_coeffs_.push_back(set_.wall);
     }
-    tank_x_ = Buffer<Vec3>(Exec::kSpace, 8);
-    tank_x_.upload(c.data(), 8);
+    const int base = int(c.size()), first = int(tris.size());
+    c.insert(c.end(), set_.obstacle_x.begin(), set_.obstacle_x.end());
+    for (Tri t : set_.obstacle_tris) {
+      for (int& v : t.v) v += base;
+      tris.push_back(t);
+    }
+    for (std::size_t k = 1; k < set_.obstacle_offset.size(); ++k) {
+      static_offset_.push_back(first + set_.obstacle_offset[k]);
+      static_coeffs_.push_back(set_.obstacle_coeffs[k - 1]);
+    }
+    static_nodes_ = int(c.size());
+    tank_x_ = Buffer<Vec3>(Exec::kSpace, c.size());
+    tank_x_.upload(c.data(), c.size());
     tank_tri_ = Buffer<Tri>(Exec::kSpace, tris.size());
     tank_tri_.upload(tris.data(), tris.size());
     tank_tris_ = int(tris.size());
@@ -364,9 +381,13 @@ class RayCouplingT final : public RayCoupling {
   std::vector<CoupleSurface> surfaces() {
     std::vector<CoupleSurface> s;
     if (body_tris_ > 0) s.push_back(body_surface(bodies_->arrays(), bodies_->model(), set_.body));
-    if (set_.tank)
-      s.push_back(
-          static_surface(Exec::kSpace, 8, tank_x_.data(), tank_tris_, tank_tri_.data(), set_.wall));
+    if (tank_tris_ > 0) {
+      CoupleSurface st = static_surface(Exec::kSpace, static_nodes_, tank_x_.data(), tank_tris_,
+                                        tank_tri_.data(), set_.wall);
+      st.tri_offset = static_offset_;
+      st.coeffs = static_coeffs_;
+      s.push_back(st);
+    }
     return s;
   }
 
@@ -421,7 +442,10 @@ class RayCouplingT final : public RayCoupling {
   std::unique_ptr<Coupler> coupler_;
   Exec ex_;
   SurfaceBvh<Exec> body_bvh_, tank_bvh_;
-  int body_tris_ = 0, tank_tris_ = 0;
+  int body_tris_ = 0, tank_tris_ = 0;  // tank_*: the static set, the tank's and obstacles'
+  int static_nodes_ = 0;
+  std::vector<int> static_offset_;
+  std::vector<ContactCoeffs> static_coeffs_;
   Buffer<Vec3> x_old_, tank_x_, x_pre_, rel_;
   Buffer<Tri> tank_tri_;
   Buffer<int> face_, tank_face_;

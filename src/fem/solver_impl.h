@@ -147,6 +147,31 @@ class BodySolverT final : public BodySolver {
     dv_.zero();  // the last velocity change is no longer a useful CG start
   }
 
+  void set_nodes(const std::vector<int>& nodes, const std::vector<Vec3>& x,
+                 const std::vector<Vec3>& v) override {
+    const std::size_t k = nodes.size();
+    if (x.size() != k || v.size() != k)
+      throw std::invalid_argument("set_nodes: " + std::to_string(k) + " nodes, " +
+                                  std::to_string(x.size()) + " positions and " +
+                                  std::to_string(v.size()) + " velocities");
+    for (int i : nodes)
+      if (i < 0 || i >= n_) throw std::invalid_argument("set_nodes: node out of range");
+    if (k == 0) return;
+    Buffer<int> idx(Exec::kSpace, k);
+    Buffer<Vec3> bx(Exec::kSpace, k), bv(Exec::kSpace, k);
+    idx.upload(nodes.data(), k);
+    bx.upload(x.data(), k);
+    bv.upload(v.data(), k);
+    const int* I = idx.data();
+    const Vec3 *X = bx.data(), *V = bv.data();
+    Vec3 *xs = x_.data(), *vs = v_.data();
+    parallel_for(ex_, int(k), [=] SPHFEM_LAMBDA(int j) {
+      xs[I[j]] = X[j];
+      vs[I[j]] = V[j];
+    });
+    exec_sync(ex_);
+  }
+
   void elastic_forces(std::vector<Vec3>& f) override {
     const fem::ElementView e = elements();
     fem::rotations(ex_, e, x_.data(), kNone, Real(0), rot_.data(), rot_scratch_.data(), P_.data(),

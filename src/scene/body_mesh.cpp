@@ -93,16 +93,8 @@ bool is_tet_mesh_file(const std::string& path) {
   return ext == ".node" || ext == ".ele" || ext == ".msh";
 }
 
-// The file as the scene means it: a relative path starts at the scene file's folder.
-std::string resolve(const std::string& file, const std::string& scene_file) {
-  namespace fs = std::filesystem;
-  const fs::path p(file);
-  if (p.is_absolute() || scene_file.empty()) return file;
-  return (fs::path(scene_file).parent_path() / p).lexically_normal().string();
-}
-
 TetMesh read_mesh_file(const BodySpec& b, const std::string& at, const std::string& scene_file) {
-  const std::string path = resolve(b.file, scene_file);
+  const std::string path = resolve_path(b.file, scene_file);
   try {
     if (is_tet_mesh_file(path)) {
       TetMesh m = load_tet_mesh(path);

@@ -517,6 +517,39 @@ const ObjectTable& body_table() {
   return t;
 }
 
+const ObjectTable& obstacle_table() {
+  static const ObjectTable t =
+      Table<ObstacleSpec>("obstacles[]",
+                          "Static obstacles: boxes or triangle surfaces (open ones too: a funnel, "
+                          "a slide, a plate) that the fluid and the bodies meet, with no FEM "
+                          "solve. The fluid meets them through the ray-traced coupling's rays "
+                          "(as static faces of infinite mass, like the tank's with `tank_rays`); "
+                          "body nodes stop on them with `fem.friction`.")
+          .string("name", &ObstacleSpec::name,
+                  "Name in logs; empty names become `obstacle<i>`, i being the position in the "
+                  "list.")
+          .choice("shape", &ObstacleSpec::shape, {"box", "mesh"},
+                  "`box` between `min` and `max`, or `mesh` to read `file`.")
+          .vec3("min", &ObstacleSpec::lo, "m", "Box: lower corner.")
+          .vec3("max", &ObstacleSpec::hi, "m", "Box: upper corner.")
+          .constraint("box: above `min` on every axis")
+          .string("file", &ObstacleSpec::file,
+                  "Mesh: a triangle surface (OBJ, PLY, STL), open or closed; a relative path is "
+                  "taken from the scene file's folder.")
+          .constraint("mesh: required")
+          .number("scale", &ObstacleSpec::scale, "-", kPositive,
+                  "Mesh: factor on the file's coordinates, applied before `offset`.")
+          .vec3("offset", &ObstacleSpec::offset, "m", "Mesh: added to the scaled coordinates.")
+          .number("restitution", &ObstacleSpec::restitution, "-", kUnit,
+                  "Fluid contact (ray-traced coupling), as `bodies[].restitution`.")
+          .number("slip", &ObstacleSpec::slip, "-", kUnit, "Fluid contact, as `bodies[].slip`.")
+          .finish([](ObstacleSpec& o, std::size_t index) {
+            if (o.name.empty()) o.name = "obstacle" + std::to_string(index);
+          })
+          .build();
+  return t;
+}
+
 const ObjectTable& fem_table() {
   static const ObjectTable t =
       Table<FemSpec>("fem",
@@ -592,6 +625,8 @@ const ObjectTable& scene_table() {
           .object("fluid", &SceneSpec::fluid, fluid_table(),
                   "Fluid material and sources; see `fluid`.")
           .array("bodies", &SceneSpec::bodies, body_table(), "Deformable bodies; see `bodies[]`.")
+          .array("obstacles", &SceneSpec::obstacles, obstacle_table(),
+                 "Static obstacles; see `obstacles[]`.")
           .object("fem", &SceneSpec::fem, fem_table(), "Solver settings of the bodies; see `fem`.")
           .object("coupling", &SceneSpec::coupling, coupling_table(),
                   "Fluid-body momentum exchange; see `coupling`.")

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -46,6 +47,14 @@ inline std::string in_quotes_list(const std::vector<std::string>& names) {
   std::string s;
   for (std::size_t i = 0; i < names.size(); ++i) s += (i ? ", " : "") + in_quotes(names[i]);
   return s;
+}
+
+// The file as the scene means it: a relative path starts at the scene file's folder.
+inline std::string resolve_path(const std::string& file, const std::string& scene_file) {
+  namespace fs = std::filesystem;
+  const fs::path p(file);
+  if (p.is_absolute() || scene_file.empty()) return file;
+  return (fs::path(scene_file).parent_path() / p).lexically_normal().string();
 }
 
 inline std::string num(double v) { return scene::format_number(v); }

@@ -13,6 +13,7 @@
 #include "sphfem/scene/fields.h"
 #include "sphfem/scene/limits.h"
 #include "sphfem/scene/load.h"
+#include "sphfem/scene/obstacles.h"
 
 namespace sphfem {
 namespace {
@@ -233,6 +234,7 @@ void validate_scene(const SceneSpec& s, const std::string& path) {
   // Counts and memory before anything is built: the bodies below are.
   check_limits(s, path, available_memory_bytes());
   check_bodies(s, path);
+  compile_obstacles(s, path);
 
   std::map<std::string, std::size_t> names;
   for (std::size_t i = 0; i < s.gauges.size(); ++i) {

@@ -1,6 +1,7 @@
 // The solvers of a scene wired together (include/sphfem/sim/simulation.h).
 #include "sphfem/sim/simulation.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -14,6 +15,7 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
   if (!scene.has_fluid() && scene.bodies.empty())
     throw std::runtime_error(
         "the scene has nothing to simulate; add fluid.blocks, fluid.emitters or bodies");
+  obstacles_ = compile_obstacles(scene, scene.path);
   if (scene.has_fluid()) fluid_model_ = compile_fluid(scene);
   if (!scene.bodies.empty()) {
     bodies_model_ = compile_scene_bodies(scene);
@@ -21,13 +23,18 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
   }
   if (scene.has_fluid()) {
     if (bodies_) carved_ = carve_bodies(fluid_model_, bodies_model_);
+    carved_ += carve_obstacles(fluid_model_, obstacles_);
     fluid_ = make_fluid_solver(fluid_model_, backend);
   }
   // The coupling's stages run whenever fluid meets a surface: bodies (either coupling), or
   // the tank's faces in the ray cast even in a scene without bodies.
   const bool rays = scene.coupling.method == CouplingMethod::RayTraced;
-  if (fluid_ && (bodies_ || (rays && scene.coupling.tank_rays))) {
+  if (fluid_ && (bodies_ || (rays && (scene.coupling.tank_rays || !obstacles_.empty())))) {
     RayCouplingSettings cs = ray_coupling_settings(scene);
+    cs.obstacle_x = obstacles_.x;
+    cs.obstacle_tris = obstacles_.tris;
+    cs.obstacle_offset = obstacles_.tri_offset;
+    cs.obstacle_coeffs = obstacles_.coeffs;
     cs.near_surface = cs.near_surface && bodies_ != nullptr;
     cs.support = fluid_model_.params.h;
     coupling_ = make_ray_coupling(cs, bodies_.get(), backend);
@@ -38,16 +45,27 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
                                  bodies_model_.surface, bodies_model_.nodes);
   }
   if (fluid_ && bodies_) inside_check_ = make_collider(Backend::Cpu);
+  if (bodies_ && !obstacles_.empty()) {
+    obstacle_check_ = make_collider(Backend::Cpu);
+    obstacle_check_->build(obstacles_.x, obstacles_.tris);
+    obstacle_check_->refit(obstacles_.x, obstacles_.x);
+  }
 }
 
 // A fluid block overlapping a body would start with particles inside it or pressed into its
 // surface, which the first steps shoot out at many metres per second; the body displaces
 // them instead. Kept: particles outside every body at least a particle radius from it.
-long carve_bodies(FluidModel& fluid, const BodiesModel& bodies) {
-  if (fluid.x0.empty() || bodies.surface.empty()) return 0;
+namespace {
+
+// Leaves out the initial particles within a particle radius of the surface, and inside it when
+// it bounds a solid.
+long carve(FluidModel& fluid, const std::vector<Vec3>& x, const std::vector<Tri>& tris,
+           bool solid) {
+  if (fluid.x0.empty() || tris.empty()) return 0;
   auto collider = make_collider(Backend::Cpu);
-  collider->build(bodies.x0, bodies.surface);
-  const std::vector<std::uint8_t> in = collider->inside(fluid.x0);
+  collider->build(x, tris);
+  const std::vector<std::uint8_t> in =
+      solid ? collider->inside(fluid.x0) : std::vector<std::uint8_t>(fluid.x0.size(), 0);
   const std::vector<collide::ClosestHit> near =
       collider->closest(fluid.x0, fluid.params.spacing / 2);
   std::size_t kept = 0;
@@ -60,6 +78,22 @@ long carve_bodies(FluidModel& fluid, const BodiesModel& bodies) {
   const long removed = long(fluid.x0.size() - kept);
   fluid.x0.resize(kept);
   fluid.v0.resize(kept);
+  return removed;
+}
+
+}  // namespace
+
+long carve_bodies(FluidModel& fluid, const BodiesModel& bodies) {
+  return carve(fluid, bodies.x0, bodies.surface, true);
+}
+
+long carve_obstacles(FluidModel& fluid, const ObstaclesModel& obstacles) {
+  long removed = 0;
+  for (std::size_t k = 0; k + 1 < obstacles.tri_offset.size(); ++k) {
+    const std::vector<Tri> tris(obstacles.tris.begin() + obstacles.tri_offset[k],
+                                obstacles.tris.begin() + obstacles.tri_offset[k + 1]);
+    removed += carve(fluid, obstacles.x, tris, obstacles.closed[k] != 0);
+  }
   return removed;
 }
 
@@ -116,12 +150,63 @@ StepInfo Simulation::step(double dt_limit) {
 
 void Simulation::step_bodies(double dt) {
   BodyStepInfo b;
+  std::vector<Vec3> before;
+  if (obstacle_check_) {
+    BodySnapshot s;
+    bodies_->snapshot(s);
+    before = std::move(s.x);
+  }
   try {
     b = bodies_->step(dt);
   } catch (const std::runtime_error& e) {
     throw BodyStepError(e.what());  // the solver's own check: a non-finite right-hand side
   }
   if (!std::isfinite(b.cg_residual)) throw BodyStepError("the body solve became non-finite");
+  if (obstacle_check_) collide_obstacles(before);
+}
+
+// Nodes whose path over the step met an obstacle's face go back to the side they came from, a
+// small gap off the face; the velocity into the face is removed and the tangential one loses
+// fem.friction times the removed normal speed (Coulomb, as on the tank's walls). Done on the
+// host after the step: a projection, like the walls', not a constraint inside the solve.
+void Simulation::collide_obstacles(const std::vector<Vec3>& before) {
+  BodySnapshot s;
+  bodies_->snapshot(s);
+  const Real gap = Real(1e-5 * norm(scene_.domain.hi - scene_.domain.lo));
+  // Each node's path over the step as a ray from where it was (the obstacles do not move).
+  std::vector<Vec3> dir(s.x.size());
+  std::vector<Real> len(s.x.size());
+  for (std::size_t i = 0; i < s.x.size(); ++i) {
+    const Vec3 d = s.x[i] - before[i];
+    len[i] = norm(d);
+    dir[i] = len[i] > Real(0) ? d / len[i] : Vec3(0, 1, 0);
+  }
+  const std::vector<collide::RayHit> hit = obstacle_check_->cast_rays(before, dir, len);
+  const Real mu = Real(scene_.fem.friction);
+  std::vector<int> nodes;
+  std::vector<Vec3> x, v;
+  for (std::size_t i = 0; i < hit.size(); ++i) {
+    if (hit[i].face < 0 || !(len[i] > Real(0))) continue;
+    const Tri& t = obstacles_.tris[std::size_t(hit[i].face)];
+    const Vec3 a = obstacles_.x[std::size_t(t.v[0])], b = obstacles_.x[std::size_t(t.v[1])],
+               c = obstacles_.x[std::size_t(t.v[2])];
+    Vec3 n = cross(b - a, c - a);
+    n = n / norm(n);
+    if (dot(before[i] - a, n) < Real(0)) n = -n;  // toward the side the node came from
+    const Vec3 p = before[i] + dir[i] * hit[i].t;
+    Vec3 vi = s.v[i];
+    const Real vn = dot(vi, n);
+    if (vn < Real(0)) {
+      const Vec3 vt = vi - n * vn;
+      const Real st = norm(vt);
+      const Real keep = st > -mu * vn ? Real(1) + mu * vn / st : Real(0);
+      vi = vt * keep;
+    }
+    nodes.push_back(int(i));
+    x.push_back(p + n * gap);
+    v.push_back(vi);
+  }
+  if (!nodes.empty()) bodies_->set_nodes(nodes, x, v);
 }
 
 void Simulation::reset_profile() {

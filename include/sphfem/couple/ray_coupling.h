@@ -46,7 +46,13 @@ struct RayCouplingSettings {
   bool open_top = false;  // no lid among the tank's faces
   ContactCoeffs wall;
   std::vector<ContactCoeffs> body;  // one per body of the BodySolver's model
-  double rebuild_quality = 2.0;     // rebuild the bodies' BVH above this quality ratio
+  // Static obstacles, ray-cast with the tank's faces (rays on): their vertices, triangles,
+  // each obstacle's range of triangles and its coefficients.
+  std::vector<Vec3> obstacle_x;
+  std::vector<Tri> obstacle_tris;
+  std::vector<int> obstacle_offset;
+  std::vector<ContactCoeffs> obstacle_coeffs;
+  double rebuild_quality = 2.0;  // rebuild the bodies' BVH above this quality ratio
 };
 
 // Sums since the last reset_stats().

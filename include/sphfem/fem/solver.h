@@ -82,6 +82,9 @@ class BodySolver {
   // rotation from scratch, so any pose is allowed, however far from the last.
   virtual void set_positions(const std::vector<Vec3>& x) = 0;
   virtual void set_velocities(const std::vector<Vec3>& v) = 0;
+  // Positions and velocities of some nodes (an obstacle's projection), the rotations kept.
+  virtual void set_nodes(const std::vector<int>& nodes, const std::vector<Vec3>& x,
+                         const std::vector<Vec3>& v) = 0;
   // Elastic forces (N, one per node) at the current positions.
   virtual void elastic_forces(std::vector<Vec3>& f) = 0;
 

@@ -115,6 +115,21 @@ struct BodySpec {
   double slip = 1.0;         // fluid contact: share of the tangential relative velocity kept
 };
 
+enum class ObstacleShape { Box, Mesh };
+
+// A static obstacle: a box or a triangle surface (open ones too: a funnel, a slide, a plate)
+// that the fluid and the bodies meet, without an FEM solve.
+struct ObstacleSpec {
+  std::string name;
+  ObstacleShape shape = ObstacleShape::Box;
+  Vec3d lo{0, 0, 0}, hi{0.1, 0.1, 0.1};  // m, box corners
+  std::string file;                      // mesh: relative to the scene file's folder
+  double scale = 1.0;                    // mesh: x -> scale x + offset
+  Vec3d offset;                          // m, mesh
+  double restitution = 0.0;              // fluid contact, as a body's
+  double slip = 1.0;
+};
+
 // Settings of the FEM solve shared by all bodies; defaults are the solver's own.
 struct FemSpec {
   double cg_tolerance = FemSettings{}.cg_tolerance;
@@ -147,6 +162,7 @@ struct SceneSpec {
   OutputSpec output;
   std::vector<GaugeSpec> gauges;
   std::vector<BodySpec> bodies;
+  std::vector<ObstacleSpec> obstacles;
   FemSpec fem;
   CouplingSpec coupling;
 

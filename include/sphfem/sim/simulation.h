@@ -12,6 +12,7 @@
 #include "sphfem/fem/model.h"
 #include "sphfem/fem/solver.h"
 #include "sphfem/scene/compile.h"
+#include "sphfem/scene/obstacles.h"
 #include "sphfem/scene/spec.h"
 #include "sphfem/sim/state.h"
 #include "sphfem/sph/model.h"
@@ -75,11 +76,13 @@ class Simulation {
   // Initial particles left out because they lay inside a body or against its surface.
   long carved_particles() const { return carved_; }
   const BodiesModel& bodies_model() const { return bodies_model_; }
+  const ObstaclesModel& obstacles() const { return obstacles_; }
 
  private:
   template <class F>
   void timed(Stage s, F&& fn);
   void step_bodies(double dt);
+  void collide_obstacles(const std::vector<Vec3>& before);
 
   SceneSpec scene_;
   FluidModel fluid_model_;
@@ -88,6 +91,8 @@ class Simulation {
   std::unique_ptr<BodySolver> bodies_;
   std::unique_ptr<RayCoupling> coupling_;
   std::unique_ptr<Collider> inside_check_;
+  ObstaclesModel obstacles_;
+  std::unique_ptr<Collider> obstacle_check_;  // body nodes against the obstacles
   StepProfile profile_;
   double t_bodies_ = 0;  // without fluid
   long carved_ = 0;
@@ -96,5 +101,7 @@ class Simulation {
 // Removes the initial particles inside a body's rest surface or closer to it than a particle
 // radius; returns how many.
 long carve_bodies(FluidModel& fluid, const BodiesModel& bodies);
+// The same around the obstacles (inside only for the closed ones).
+long carve_obstacles(FluidModel& fluid, const ObstaclesModel& obstacles);
 
 }  // namespace sphfem
