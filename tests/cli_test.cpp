@@ -193,6 +193,19 @@ TEST_F(Cli, RunOfABodySceneWritesBodyFrames) {
   EXPECT_NE(read_text(out / "run.json").find("\"cloth\""), std::string::npos);
 }
 
+// The obstacles are written once, as triangles ParaView opens beside the collections.
+TEST_F(Cli, RunOfAnObstacleSceneWritesItsSurface) {
+  const fs::path out = dir_ / "out";
+  const Result r = cli("run " + source_file("scenes/funnel.json") +
+                       " --duration 0.02 --quiet --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const sphfem::io::PointSet ps = sphfem::io::read_vtu((out / "obstacles.vtu").string());
+  EXPECT_EQ(ps.size(), 64u);
+  EXPECT_EQ(ps.types.size(), 64u);
+  ASSERT_EQ(ps.cell_data.size(), 1u);
+  EXPECT_EQ(ps.cell_data[0].name, "obstacle");
+}
+
 TEST_F(Cli, BadBodyExitsWithCodeTwoAndWritesNothing) {
   std::string scene = read_text(source_file("scenes/cantilever.json"));
   const std::string poisson = "\"poisson\": 0.3";

@@ -191,6 +191,11 @@ LoadedFrame load_frame(const std::string& dir, const FrameFiles& f) {
     }
   }
   if (!f.bodies.empty()) out.frame.meshes = render::body_meshes(io::read_vtu(dir + "/" + f.bodies));
+  // The static obstacles, beside the frames (sim/run.cpp writes them once).
+  const std::string obstacles = dir + "/obstacles.vtu";
+  if (fs::exists(obstacles))
+    for (render::TriangleMesh& m : render::obstacle_meshes(io::read_vtu(obstacles)))
+      out.frame.meshes.push_back(std::move(m));
   return out;
 }
 

@@ -4,10 +4,13 @@
 
 namespace sphfem::render {
 
-std::vector<TriangleMesh> body_meshes(const io::PointSet& s) {
+namespace {
+
+// The triangles grouped by the values of the integer cell array `group` (one group without it).
+std::map<int, TriangleMesh> grouped_meshes(const io::PointSet& s, const char* group) {
   const io::DataArray* body = nullptr;
   for (const io::DataArray& a : s.cell_data)
-    if (a.name == "body" && a.is_int() && a.components == 1 && a.ivalues.size() == s.types.size())
+    if (a.name == group && a.is_int() && a.components == 1 && a.ivalues.size() == s.types.size())
       body = &a;
   struct Building {
     TriangleMesh mesh;
@@ -29,10 +32,27 @@ std::vector<TriangleMesh> body_meshes(const io::PointSet& s) {
     }
     b.mesh.indices.resize(b.mesh.indices.size() / 3 * 3);  // drop a cut triangle
   }
+  std::map<int, TriangleMesh> out;
+  for (auto& [index, b] : by_body) out[index] = std::move(b.mesh);
+  return out;
+}
+
+}  // namespace
+
+std::vector<TriangleMesh> body_meshes(const io::PointSet& s) {
   std::vector<TriangleMesh> out;
-  for (auto& [index, b] : by_body) {
-    b.mesh.color = body_color(index);
-    out.push_back(std::move(b.mesh));
+  for (auto& [index, mesh] : grouped_meshes(s, "body")) {
+    mesh.color = body_color(index);
+    out.push_back(std::move(mesh));
+  }
+  return out;
+}
+
+std::vector<TriangleMesh> obstacle_meshes(const io::PointSet& s) {
+  std::vector<TriangleMesh> out;
+  for (auto& [index, mesh] : grouped_meshes(s, "obstacle")) {
+    mesh.color = Vec3d(0.62, 0.62, 0.66);
+    out.push_back(std::move(mesh));
   }
   return out;
 }

@@ -78,4 +78,22 @@ io::PointSet BodyFrames::tets(const BodySnapshot& s) const {
   return ps;
 }
 
+io::PointSet obstacle_surface(const ObstaclesModel& m) {
+  io::PointSet ps;
+  for (const Vec3& p : m.x)
+    ps.positions.insert(ps.positions.end(), {float(p.x), float(p.y), float(p.z)});
+  io::DataArray which;
+  which.name = "obstacle";
+  for (std::size_t k = 0; k + 1 < m.tri_offset.size(); ++k)
+    for (int f = m.tri_offset[k]; f < m.tri_offset[k + 1]; ++f) {
+      const Tri& t = m.tris[std::size_t(f)];
+      ps.connectivity.insert(ps.connectivity.end(), {t.v[0], t.v[1], t.v[2]});
+      ps.offsets.push_back(std::int32_t(ps.connectivity.size()));
+      ps.types.push_back(io::kVtkTriangle);
+      which.ivalues.push_back(std::int32_t(k));
+    }
+  ps.cell_data.push_back(which);
+  return ps;
+}
+
 }  // namespace sphfem

@@ -206,6 +206,9 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
     bodies_pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/bodies.pvd");
     tets_pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/bodies_tets.pvd");
   }
+  // The obstacles do not move: one file for the whole run, beside the collections.
+  if (scene.output.vtu && !sim.obstacles().empty())
+    io::write_vtu(opt.out_dir + "/obstacles.vtu", obstacle_surface(sim.obstacles()));
   auto frame_file = [](const char* kind, int frame, const char* ext) {
     char name[64];
     std::snprintf(name, sizeof name, "%s_%06d%s", kind, frame, ext);

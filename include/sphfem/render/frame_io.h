@@ -13,4 +13,7 @@ namespace sphfem::render {
 // palette colour. Other cell types are skipped.
 std::vector<TriangleMesh> body_meshes(const io::PointSet& surface);
 
+// The same for the obstacles' file (obstacles.vtu, cell array "obstacle"), in one grey.
+std::vector<TriangleMesh> obstacle_meshes(const io::PointSet& surface);
+
 }  // namespace sphfem::render

@@ -7,6 +7,7 @@
 #include "sphfem/fem/model.h"
 #include "sphfem/fem/solver.h"
 #include "sphfem/io/frame.h"
+#include "sphfem/scene/obstacles.h"
 
 namespace sphfem {
 
@@ -31,5 +32,8 @@ class BodyFrames {
   std::vector<int> all_nodes_;              // 0 .. nodes - 1
   io::PointSet surface_cells_, tet_cells_;  // connectivity, offsets, types and cell data
 };
+
+// The obstacles' triangles (static), with cell data "obstacle": each triangle's obstacle.
+io::PointSet obstacle_surface(const ObstaclesModel& obstacles);
 
 }  // namespace sphfem
