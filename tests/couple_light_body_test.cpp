@@ -1,6 +1,7 @@
-// A light body in water with the default coupling (near-surface density): a soft ball of
-// 200 kg/m3 released under the surface rises, comes to rest floating, and its kinetic energy
-// decays without a growing oscillation; no particle crosses its surface.
+// Light bodies in water: a soft ball of 200 kg/m3 released under the surface rises, comes to
+// rest floating, and its kinetic energy decays without a growing oscillation, in both
+// ray-traced modes; no particle crosses its surface. A light cloth under a falling column
+// (disabled: not yet stable).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,8 +17,15 @@
 namespace sphfem {
 namespace {
 
-TEST(CoupleLightBody, LightBallRisesAndComesToRestFloating) {
-  const nlohmann::json j = nlohmann::json::parse(R"({
+// Both ray-traced modes: with the near-surface density (the default) and the paper's
+// exchange alone. The paper's mode keeps more motion in the ball's nodes at rest (its light
+// nodes meet the particles one contact at a time), so its energy bound is 10 % of the peak
+// instead of 1 %; both must rise, settle at one height and decay.
+class CoupleLightBall : public ::testing::TestWithParam<bool> {};
+
+TEST_P(CoupleLightBall, RisesAndComesToRestFloating) {
+  const bool near_surface = GetParam();
+  nlohmann::json j = nlohmann::json::parse(R"({
     "simulation": {"solver": "dfsph", "dt_max": 0.002},
     "fluid": {"particle_radius": 0.006, "viscosity": 1e-5,
               "blocks": [{"min": [0, 0, 0], "max": [0.24, 0.34, 0.24]}]},
@@ -27,6 +35,7 @@ TEST(CoupleLightBody, LightBallRisesAndComesToRestFloating) {
                 "material": {"density": 200, "young": 2e5, "poisson": 0.3,
                              "damping_alpha": 1.0, "damping_beta": 0.002}}]
   })");
+  j["coupling"]["near_surface_density"] = near_surface;
   const SceneSpec scene = parse_scene(j, "ball.json");
   validate_scene(scene, "ball.json");
   Simulation sim(scene, Backend::Cpu);
@@ -58,15 +67,26 @@ TEST(CoupleLightBody, LightBallRisesAndComesToRestFloating) {
   const double peak = *std::max_element(energy.begin(), energy.end());
   const double late = *std::max_element(energy.begin() + 30, energy.end());        // 1.5-2 s
   const double mid = *std::max_element(energy.begin() + 20, energy.begin() + 30);  // 1-1.5 s
+  const auto settled = std::minmax_element(height.begin() + 30, height.end());
+  const long inside = sim.count_inside();
   std::printf(
-      "height %.3f -> %.3f m; kinetic energy peak %.3g J, 1-1.5 s %.3g, 1.5-2 s %.3g; "
-      "%ld crossed\n",
-      height.front(), height.back(), peak, mid, late, crossed);
+      "near-surface %d: height %.3f -> %.3f m (%.4f over 1.5-2 s); kinetic energy peak %.3g J, "
+      "1-1.5 s %.3g, 1.5-2 s %.3g; %ld crossed, %ld inside\n",
+      int(near_surface), height.front(), height.back(), *settled.second - *settled.first, peak,
+      mid, late, crossed, inside);
   EXPECT_GT(height.back() - height.front(), 0.1) << "the ball did not rise";
-  EXPECT_LT(late, 0.01 * peak) << "the ball did not come to rest";
+  // At rest: its height within a particle spacing (12 mm, the water surface's own roughness).
+  EXPECT_LT(*settled.second - *settled.first, 0.012) << "the ball does not rest at one height";
+  EXPECT_LT(late, (near_surface ? 0.01 : 0.1) * peak) << "the ball did not come to rest";
   EXPECT_LT(late, mid * 1.5) << "the motion grows instead of decaying";
   EXPECT_EQ(crossed, 0);
+  EXPECT_EQ(inside, 0);
 }
+
+INSTANTIATE_TEST_SUITE_P(Modes, CoupleLightBall, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& i) {
+                           return std::string(i.param ? "NearSurfaceDensity" : "PaperMode");
+                         });
 
 // A light cloth (0.2 kg/m2, pinned along two opposite edges) under a falling column of water
 // 55 times heavier, in both ray-traced modes. Disabled: it fails in both modes, with either
