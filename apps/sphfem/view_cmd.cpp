@@ -117,6 +117,9 @@ class LiveScene {
       bodies->snapshot(body_snap_);
       f.meshes = render::body_meshes(frames_->surface(body_snap_));
     }
+    if (!sim_->obstacles().empty())
+      for (render::TriangleMesh& m : render::obstacle_meshes(obstacle_surface(sim_->obstacles())))
+        f.meshes.push_back(std::move(m));
   }
 
   double time() const { return sim_->time(); }
