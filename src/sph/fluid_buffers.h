@@ -34,10 +34,10 @@ struct FluidBuffers {
   Buffer<std::uint32_t> nbr;  // fluid neighbour lists of the step (FluidView::nbr)
   Buffer<int> nbr_n;
   int nbr_cap = 0;
-  int cap = 0;                             // particles there is room for
-  bool nbr_interleaved = false;            // the layout of nbr (FluidView::nbr_si, view())
-  Buffer<std::uint32_t> tmpu, keys, perm;  // id's gather target; the sort's keys and order
-  Buffer<std::uint32_t> start;             // cell starts of the fluid's grid
+  int cap = 0;                       // particles there is room for
+  bool nbr_interleaved = false;      // the layout of nbr (FluidView::nbr_si, view())
+  Buffer<std::uint32_t> keys, perm;  // the sort's keys and order; keys: id's gather target
+  Buffer<std::uint32_t> start;       // cell starts of the fluid's grid
 
   // Room for cap particles on a grid of `cells` cells; the warm starts begin at 0.
   void allocate(MemSpace s, int capacity, int full_neighbors, long long cells) {
@@ -58,22 +58,25 @@ struct FluidBuffers {
     // two cache lines a particle).
     nbr_interleaved = s == MemSpace::Device;
     nbr_n = Buffer<int>(s, cap);
-    for (Buffer<std::uint32_t>* b : {&id, &tmpu, &keys, &perm}) *b = Buffer<std::uint32_t>(s, cap);
+    for (Buffer<std::uint32_t>* b : {&id, &keys, &perm}) *b = Buffer<std::uint32_t>(s, cap);
     start = Buffer<std::uint32_t>(s, std::size_t(cells) + 1);
   }
 
   // Re-orders the first n particles by cell for locality (a radix sort of their cell keys in
-  // g): the state follows, with p, the warm starts under DFSPH only; then the cells' ranges.
+  // g): the cells' ranges, then the state follows, with p, the warm starts under DFSPH only.
   template <class Exec>
   void sort(Exec& ex, const GridView& g, int n, int key_bits, bool dfsph) {
     stages::cell_keys(ex, g, x.data(), keys.data(), perm.data(), n);
     sort_pairs(ex, keys.data(), perm.data(), n, key_bits);
+    stages::cell_starts(ex, keys.data(), start.data(), n, g.cells());
     stages::gather(ex, x.data(), tmp3.data(), perm.data(), n);
     x.swap(tmp3);
     stages::gather(ex, v.data(), tmp3.data(), perm.data(), n);
     v.swap(tmp3);
-    stages::gather(ex, id.data(), tmpu.data(), perm.data(), n);
-    id.swap(tmpu);
+    // The keys are spent once the cells' ranges are known: they take the ids, which saves a
+    // buffer of their own.
+    stages::gather(ex, id.data(), keys.data(), perm.data(), n);
+    id.swap(keys);
     stages::gather(ex, p.data(), tmpr.data(), perm.data(), n);
     p.swap(tmpr);
     if (dfsph) {
@@ -82,7 +85,6 @@ struct FluidBuffers {
       stages::gather(ex, warm_dens.data(), tmpr.data(), perm.data(), n);
       warm_dens.swap(tmpr);
     }
-    stages::cell_starts(ex, keys.data(), start.data(), n, g.cells());
   }
 
   // The first n particles as the stages see them.

@@ -39,7 +39,7 @@ struct FluidView {
   std::uint32_t* id = nullptr;
   // Fluid neighbours of each particle as density() found them, kept for the step's later
   // passes: the k-th of particle i at nbr[i * nbr_si + k * nbr_sk], k < nbr_n[i]; nbr_n[i] =
-  // -1 where more than nbr_cap were found (those particles scan the grid). nbr = nullptr: no
+  // -1 where nbr_cap or more were found (those particles scan the grid). nbr = nullptr: no
   // list. The host lays a particle's list out contiguously (nbr_sk = 1, cache lines), a device
   // interleaves the lists (nbr_si = 1, coalesced reads of neighbouring threads); see
   // FluidBuffers::view.
@@ -68,6 +68,74 @@ SPHFEM_HD void for_fluid_neighbors(const FluidView& f, const GridView& g, int i,
     const Vec3 rij = xi - f.x[j];
     fn(j, rij, norm2(rij));
   }
+}
+
+#if !defined(__CUDA_ARCH__)
+// A chunk of one particle's listed pairs, computed on the host in two loops: the gathers of
+// x_j into rows, then the square roots and the kernel in one vectorised loop without a branch
+// (solver_cpu.cpp is built with -fno-math-errno -fno-trapping-math for it; neither changes a
+// value).
+struct PairChunk {
+  static constexpr int kSize = 32;
+  std::uint32_t j[kSize];
+  Real rx[kSize], ry[kSize], rz[kSize], r2[kSize], w[kSize], s[kSize];
+
+  template <bool WithW, class Kern>
+  void fill(const Kern& kernel, const std::uint32_t* list, std::size_t sk, const Vec3* x,
+            const Vec3& xi, int m) {
+    for (int k = 0; k < m; ++k) {
+      const std::uint32_t jj = list[std::size_t(k) * sk];
+      const Vec3 r = xi - x[jj];
+      j[k] = jj;
+      rx[k] = r.x;
+      ry[k] = r.y;
+      rz[k] = r.z;
+    }
+    const Kern K = kernel;  // a local copy: no store below can change it
+#pragma omp simd
+    for (int k = 0; k < m; ++k) {
+      const Real q2 = norm2(Vec3(rx[k], ry[k], rz[k]));
+      const Real rr = std::sqrt(q2);
+      r2[k] = q2;
+      s[k] = K.gscale(rr);
+      if (WithW) w[k] = K.W(rr);
+    }
+  }
+};
+#endif
+
+// f(j, rij, r2, W_ij, grad W_ij) for each fluid neighbour j of particle i, in the order of
+// for_fluid_neighbors (W only when WithW, else 0). The host computes a listed particle's
+// pairs a chunk at a time (PairChunk) and then hands them to f one by one, so every sum keeps
+// its order and its bits; the sqrt, the division and the kernel's branch per pair had made
+// DFSPH's sweeps two thirds of its step. A device computes them pair by pair.
+template <bool WithW, class F>
+SPHFEM_HD void for_fluid_pairs(const FluidView& f, const GridView& g, const Kernel& K, int i,
+                               const Vec3& xi, Real h2, F&& fn) {
+#if !defined(__CUDA_ARCH__)
+  const int n = f.nbr ? f.nbr_n[i] : -1;
+  if (n >= 0) {
+    const std::uint32_t* list = f.nbr + std::size_t(i) * f.nbr_si;
+    PairChunk c;
+    for (int k0 = 0; k0 < n; k0 += PairChunk::kSize) {
+      const int m = n - k0 < PairChunk::kSize ? n - k0 : PairChunk::kSize;
+      const std::uint32_t* part = list + std::size_t(k0) * f.nbr_sk;
+      if (K.kind == 0)
+        c.fill<WithW>(K.cubic, part, f.nbr_sk, f.x, xi, m);
+      else
+        c.fill<WithW>(K.wendland, part, f.nbr_sk, f.x, xi, m);
+      for (int k = 0; k < m; ++k) {
+        const Vec3 r(c.rx[k], c.ry[k], c.rz[k]);
+        fn(c.j[k], r, c.r2[k], WithW ? c.w[k] : Real(0), r * c.s[k]);
+      }
+    }
+    return;
+  }
+#endif
+  for_fluid_neighbors(f, g, i, xi, h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+    const Real rr = std::sqrt(r2);
+    fn(j, r, r2, WithW ? K.W(rr) : Real(0), K.grad(r, rr));
+  });
 }
 
 // Wall samples: the tank's (static) or those on body surfaces (moving).
@@ -226,24 +294,24 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     const Vec3 xi = f.x[i];
     Real sum = 0, grad2 = 0;
     Vec3 gsum, gwall, gwall_v;
-    int count = 0, walls = 0;
-    // Branch-free store into the list (or a scratch slot without one): the last slot takes the
-    // overflow, which nbr_n = -1 then marks unused.
+    int walls = 0;
+    // The list first, in the grid's order (or into a scratch slot without a list); the last
+    // slot takes the overflow, which nbr_n = -1 then marks unused.
     std::uint32_t scratch;
     std::uint32_t* list = f.nbr ? f.nbr + std::size_t(i) * f.nbr_si : &scratch;
     const std::size_t step = f.nbr ? f.nbr_sk : 0;
     const int last = f.nbr ? f.nbr_cap - 1 : 0;
-    for_neighbors(g, f.x, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      const Real rr = std::sqrt(r2);
-      sum += P.kernel.W(rr);
-      list[std::size_t(count < last ? count : last) * step] = j;
-      ++count;
-      if (with_alpha) {
-        const Vec3 gw = P.kernel.grad(r, rr) * P.volume;
-        gsum += gw;
-        grad2 += norm2(gw);
-      }
-    });
+    const int count = collect_neighbors(g, f.x, xi, P.h2, list, step, last, 0);
+    if (f.nbr) f.nbr_n[i] = count <= last ? count : -1;
+    for_fluid_pairs<true>(f, g, P.kernel, i, xi, P.h2,
+                          [&](std::uint32_t, const Vec3&, Real, Real wk, const Vec3& grad) {
+                            sum += wk;
+                            if (with_alpha) {
+                              const Vec3 gw = grad * P.volume;
+                              gsum += gw;
+                              grad2 += norm2(gw);
+                            }
+                          });
     Real rho = P.mass * sum;
     for_wall_samples(w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
@@ -264,7 +332,6 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     }
     f.rho[i] = rho;
     f.nb[i] = count;
-    if (f.nbr) f.nbr_n[i] = count <= f.nbr_cap ? count : -1;
     if (!with_alpha) {
       const Real p = P.stiffness * (rho / P.rho0 - Real(1));
       f.p[i] = p > Real(0) ? p : Real(0);
@@ -353,10 +420,8 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
     const Real hs = Real(0.5) * P.h;  // smoothing length of the artificial viscosity
     const Real inv_dt = dt > Real(0) ? Real(1) / dt : Real(0);
     Vec3 acc = P.gravity;
-    for_fluid_neighbors(f, g, i, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+    auto pair = [&](std::uint32_t j, const Vec3& r, Real r2, Real wk, const Vec3& gw) {
       if (r2 <= Real(0)) return;
-      const Real rr = std::sqrt(r2);
-      const Vec3 gw = P.kernel.grad(r, rr);
       const Real rhoj = f.rho[j];
       const Vec3 vij = vi - f.v[j];
       const Real vr = dot(vij, r);
@@ -368,8 +433,13 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
         s += P.mass * P.alpha_av * P.sound_speed * mu / (Real(0.5) * (rhoi + rhoj));
       }
       acc += gw * s;
-      if (P.xsph > Real(0)) acc -= vij * (P.xsph * inv_dt * (P.mass / rhoj) * P.kernel.W(rr));
-    });
+      if (P.xsph > Real(0)) acc -= vij * (P.xsph * inv_dt * (P.mass / rhoj) * wk);
+    };
+    // W only for XSPH.
+    if (P.xsph > Real(0))
+      for_fluid_pairs<true>(f, g, P.kernel, i, xi, P.h2, pair);
+    else
+      for_fluid_pairs<false>(f, g, P.kernel, i, xi, P.h2, pair);
     for_wall_samples(w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        if (r2 <= Real(0)) return;
@@ -512,9 +582,10 @@ double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g, 
   return reduce_sum(ex, f.n, [=] SPHFEM_LAMBDA(int i) -> double {
     const Vec3 xi = f.x[i], vi = f.v[i];
     Real d = 0;
-    for_fluid_neighbors(f, g, i, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      d += P.volume * dot(vi - f.v[j], P.kernel.grad(r, std::sqrt(r2)));
-    });
+    for_fluid_pairs<false>(f, g, P.kernel, i, xi, P.h2,
+                           [&](std::uint32_t j, const Vec3&, Real, Real, const Vec3& gw) {
+                             d += P.volume * dot(vi - f.v[j], gw);
+                           });
     for_wall_samples(
         w, xi, P.h2, [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
           d += (b.psi[j] / P.rho0) * dot(relative_to(b, j, vi), P.kernel.grad(r, std::sqrt(r2)));
@@ -623,11 +694,11 @@ void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const Gri
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
     Real sw = 0, sk = 0;
-    for_fluid_neighbors(f, g, i, xi, P.h2, [&](std::uint32_t j, const Vec3&, Real r2) {
-      const Real w = P.kernel.W(std::sqrt(r2));
-      sw += w;
-      sk += w * f.warm_dens[j];
-    });
+    for_fluid_pairs<true>(f, g, P.kernel, i, xi, P.h2,
+                          [&](std::uint32_t j, const Vec3&, Real, Real w, const Vec3&) {
+                            sw += w;
+                            sk += w * f.warm_dens[j];
+                          });
     for_wall_samples(w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3&, Real r2) {
                        const Real wk = P.kernel.W(std::sqrt(r2));
@@ -697,10 +768,11 @@ void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, con
     const Vec3 xi = f.x[i];
     const Real ki = f.kappa[i];
     Vec3 dv;
-    for_fluid_neighbors(f, g, i, xi, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      const Real k = ki + f.kappa[j];
-      if (k != Real(0)) dv += P.kernel.grad(r, std::sqrt(r2)) * (P.volume * k);
-    });
+    for_fluid_pairs<false>(f, g, P.kernel, i, xi, P.h2,
+                           [&](std::uint32_t j, const Vec3&, Real, Real, const Vec3& gw) {
+                             const Real k = ki + f.kappa[j];
+                             if (k != Real(0)) dv += gw * (P.volume * k);
+                           });
     for_wall_samples(w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        const Real k = dfsph_wall_pair(P, b, j, ki, b.kappa[j]);

@@ -15,26 +15,29 @@ struct CubicSpline {
     k = Real(8) / (pi * h * h * h);
     l = Real(48) / (pi * h * h * h);
   }
+  // W and the gradient's scale select between their pieces instead of branching, so the host
+  // computes a particle's pairs in vectorised loops (stages::for_fluid_pairs); the values are
+  // those of the branches.
   SPHFEM_HD Real W(Real r) const {
     const Real q = r * inv_h;
-    if (q >= Real(1)) return Real(0);
-    if (q <= Real(0.5)) return k * (Real(6) * q * q * q - Real(6) * q * q + Real(1));
     const Real f = Real(1) - q;
-    return k * Real(2) * f * f * f;
+    const Real inner = k * (Real(6) * q * q * q - Real(6) * q * q + Real(1));
+    const Real outer = k * Real(2) * f * f * f;
+    const Real w = q <= Real(0.5) ? inner : outer;
+    return q >= Real(1) ? Real(0) : w;
+  }
+  // grad W = rij * gscale(r), 0 outside the support and at r = 0.
+  SPHFEM_HD Real gscale(Real r) const {
+    const Real q = r * inv_h;
+    const Real f = Real(1) - q;
+    const Real inner = l * q * (Real(3) * q - Real(2));
+    const Real outer = -l * f * f;
+    const Real dq = q <= Real(0.5) ? inner : outer;
+    const Real s = dq * inv_h / r;
+    return q >= Real(1) || r <= Real(1e-9) * h ? Real(0) : s;
   }
   // Gradient with respect to x_i of W(|x_i - x_j|), given rij = x_i - x_j and r = |rij|.
-  SPHFEM_HD Vec3 grad(const Vec3& rij, Real r) const {
-    const Real q = r * inv_h;
-    if (q >= Real(1) || r <= Real(1e-9) * h) return Vec3();
-    Real dq;
-    if (q <= Real(0.5))
-      dq = l * q * (Real(3) * q - Real(2));
-    else {
-      const Real f = Real(1) - q;
-      dq = -l * f * f;
-    }
-    return rij * (dq * inv_h / r);
-  }
+  SPHFEM_HD Vec3 grad(const Vec3& rij, Real r) const { return rij * gscale(r); }
 };
 
 struct WendlandC2 {
@@ -46,17 +49,18 @@ struct WendlandC2 {
   }
   SPHFEM_HD Real W(Real r) const {
     const Real q = r * inv_h;
-    if (q >= Real(1)) return Real(0);
     const Real f = Real(1) - q;
-    return k * f * f * f * f * (Real(1) + Real(4) * q);
+    const Real w = k * f * f * f * f * (Real(1) + Real(4) * q);
+    return q >= Real(1) ? Real(0) : w;
   }
-  SPHFEM_HD Vec3 grad(const Vec3& rij, Real r) const {
+  // dW/dr = -20 k q (1-q)^3 / h; divided by r this is -20 k (1-q)^3 / h^2 (no 1/r singularity).
+  SPHFEM_HD Real gscale(Real r) const {
     const Real q = r * inv_h;
-    if (q >= Real(1)) return Vec3();
     const Real f = Real(1) - q;
-    // dW/dr = -20 k q (1-q)^3 / h; divided by r this is -20 k (1-q)^3 / h^2 (no 1/r singularity).
-    return rij * (Real(-20) * k * f * f * f * inv_h * inv_h);
+    const Real s = Real(-20) * k * f * f * f * inv_h * inv_h;
+    return q >= Real(1) ? Real(0) : s;
   }
+  SPHFEM_HD Vec3 grad(const Vec3& rij, Real r) const { return rij * gscale(r); }
 };
 
 // Either kernel behind one value type, so the solver is not templated on it.
@@ -70,6 +74,7 @@ struct Kernel {
   SPHFEM_HD Vec3 grad(const Vec3& rij, Real r) const {
     return kind == 0 ? cubic.grad(rij, r) : wendland.grad(rij, r);
   }
+  SPHFEM_HD Real gscale(Real r) const { return kind == 0 ? cubic.gscale(r) : wendland.gscale(r); }
 };
 
 }  // namespace sphfem
