@@ -30,7 +30,7 @@ struct FluidBuffers {
   Buffer<Vec3> tmp3;  // the sort's gather target, then FluidView::gwall until the next sort
   Buffer<Real> rho, p, alpha, kappa, ksum;
   Buffer<Real> tmpr;  // gather target; the smoothed warm start (dfsph_smooth_warm)
-  Buffer<int> nb, full;
+  Buffer<int> nb, flags;
   Buffer<std::uint32_t> nbr;  // fluid neighbour lists of the step (FluidView::nbr)
   Buffer<int> nbr_n;
   int nbr_cap = 0;
@@ -48,7 +48,7 @@ struct FluidBuffers {
     warm_div.zero();
     warm_dens.zero();
     nb = Buffer<int>(s, cap);
-    full = Buffer<int>(s, cap);
+    flags = Buffer<int>(s, cap);
     // Room for twice a full support's neighbours; a particle compressed beyond that scans the
     // grid instead (stages::for_fluid_neighbors).
     nbr_cap = std::max(32, 2 * full_neighbors);
@@ -101,7 +101,7 @@ struct FluidBuffers {
     f.kappa_sum = ksum.data();
     f.warm_div = warm_div.data();
     f.warm_dens = warm_dens.data();
-    f.full = full.data();
+    f.flags = flags.data();
     f.gwall = tmp3.data();  // free between the sort and the next one
     f.nb = nb.data();
     f.id = id.data();

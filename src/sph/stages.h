@@ -34,7 +34,7 @@ struct FluidView {
   Real* warm_div = nullptr;   // DFSPH warm start of the divergence solve (dfsph_remember)
   Real* warm_dens = nullptr;  // the same for the density solve
   int* nb = nullptr;          // fluid neighbour count
-  int* full = nullptr;        // DFSPH: fluid and wall samples nearly fill the support
+  int* flags = nullptr;       // kFullSupport, kNearTank of density()
   Vec3* gwall = nullptr;      // DFSPH: sum_b V grad W_ib (density), read by wall_density
   std::uint32_t* id = nullptr;
   // Fluid neighbours of each particle as density() found them, kept for the step's later
@@ -138,6 +138,10 @@ SPHFEM_HD void for_fluid_pairs(const FluidView& f, const GridView& g, const Kern
   });
 }
 
+// Bits of FluidView::flags, set by density() for the step's later passes.
+constexpr int kFullSupport = 1;  // DFSPH: fluid and wall samples nearly fill the support
+constexpr int kNearTank = 2;     // some of the tank's samples are in reach
+
 // Wall samples: the tank's (static) or those on body surfaces (moving).
 struct BoundaryView {
   int n = 0;
@@ -179,6 +183,19 @@ template <class F>
 SPHFEM_HD void for_wall_samples(const Walls& w, const Vec3& xi, Real h2, F&& f) {
   for_neighbors(w.fixed.grid, w.fixed.x, xi, h2,
                 [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.fixed, j, r, r2); });
+  for_neighbors(w.moving.grid, w.moving.x, xi, h2,
+                [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.moving, j, r, r2); });
+}
+
+// The same for fluid particle i after density(), which flagged the particles with the tank's
+// samples in reach: the others skip the scan of the tank's grid (nine empty ranges a particle
+// and pass, a tenth of a DFSPH step on the dam break). The samples found are the scan's.
+template <class F>
+SPHFEM_HD void for_wall_samples(const FluidView& fl, int i, const Walls& w, const Vec3& xi, Real h2,
+                                F&& f) {
+  if (!fl.flags || (fl.flags[i] & kNearTank))
+    for_neighbors(w.fixed.grid, w.fixed.x, xi, h2,
+                  [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.fixed, j, r, r2); });
   for_neighbors(w.moving.grid, w.moving.x, xi, h2,
                 [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.moving, j, r, r2); });
 }
@@ -313,11 +330,13 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
                             }
                           });
     Real rho = P.mass * sum;
+    int tank = 0;
     for_wall_samples(w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        const Real rr = std::sqrt(r2);
                        rho += b.psi[j] * P.kernel.W(rr);
                        ++walls;
+                       tank += &b == &w.fixed ? 1 : 0;
                        if (with_alpha) {
                          const Vec3 gw = P.kernel.grad(r, rr);
                          gwall += gw * (b.psi[j] / P.rho0);
@@ -332,6 +351,7 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     }
     f.rho[i] = rho;
     f.nb[i] = count;
+    int flags = tank > 0 ? kNearTank : 0;
     if (!with_alpha) {
       const Real p = P.stiffness * (rho / P.rho0 - Real(1));
       f.p[i] = p > Real(0) ? p : Real(0);
@@ -340,9 +360,10 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
       // fluid neighbour j by dt V grad W_ij kappa_i; the walls carry their own stiffness.
       const Real s = norm2(gsum + gwall) + grad2;
       f.alpha[i] = s > Real(1e-6) ? Real(1) / s : Real(0);
-      f.full[i] = count + walls >= full_neighborhood(P) ? 1 : 0;
+      flags |= count + walls >= full_neighborhood(P) ? kFullSupport : 0;
       f.gwall[i] = gwall_v;
     }
+    f.flags[i] = flags;
   });
 }
 
@@ -440,7 +461,7 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
       for_fluid_pairs<true>(f, g, P.kernel, i, xi, P.h2, pair);
     else
       for_fluid_pairs<false>(f, g, P.kernel, i, xi, P.h2, pair);
-    for_wall_samples(w, xi, P.h2,
+    for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        if (r2 <= Real(0)) return;
                        const Vec3 gw = P.kernel.grad(r, std::sqrt(r2));
@@ -587,13 +608,13 @@ double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g, 
                              d += P.volume * dot(vi - f.v[j], gw);
                            });
     for_wall_samples(
-        w, xi, P.h2, [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
+        f, i, w, xi, P.h2, [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
           d += (b.psi[j] / P.rho0) * dot(relative_to(b, j, vi), P.kernel.grad(r, std::sqrt(r2)));
         });
     NearSurface s;
     if (near_surface(w.surface, i, s)) d -= s.slope * dot(vi - s.vs, s.n);
     Real err = divergence ? d * dt : (f.rho[i] / P.rho0 - Real(1)) * pos_rate + dt * d;
-    if (divergence && !f.full[i] && err > Real(0)) err = Real(0);
+    if (divergence && !(f.flags[i] & kFullSupport) && err > Real(0)) err = Real(0);
     return double(dfsph_update(err, f.alpha[i], f.kappa_sum[i], dt, f.kappa[i]));
   });
 }
@@ -699,7 +720,7 @@ void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const Gri
                             sw += w;
                             sk += w * f.warm_dens[j];
                           });
-    for_wall_samples(w, xi, P.h2,
+    for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3&, Real r2) {
                        const Real wk = P.kernel.W(std::sqrt(r2));
                        sw += wk;
@@ -770,10 +791,10 @@ void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, con
     Vec3 dv;
     for_fluid_pairs<false>(f, g, P.kernel, i, xi, P.h2,
                            [&](std::uint32_t j, const Vec3&, Real, Real, const Vec3& gw) {
-                             const Real k = ki + f.kappa[j];
-                             if (k != Real(0)) dv += gw * (P.volume * k);
+                             // Adding a zero term leaves dv as it is (dv is never -0).
+                             dv += gw * (P.volume * (ki + f.kappa[j]));
                            });
-    for_wall_samples(w, xi, P.h2,
+    for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        const Real k = dfsph_wall_pair(P, b, j, ki, b.kappa[j]);
                        if (k != Real(0)) dv += P.kernel.grad(r, std::sqrt(r2)) * k;

@@ -30,22 +30,60 @@ struct GridView {
   SPHFEM_HD int cells() const { return nx * ny * nz; }
 };
 
+// The cells a query at xi visits: the 3 x 3 rows of up to three cells around its own, each
+// trimmed to the cells that can hold a point within sqrt(h2) (cell size h: about a quarter of
+// the 27 cells, the corners and most edges, are out of reach). The bound is the distance to
+// the cell's faces less 1e-4 of a cell, so a cell whose index rounding put a point there is
+// never skipped: the points found and their order are those of the full 27 cells.
+struct CellRows {
+  int ix, x0, x1, y0, y1, z0, z1, iy, iz;
+  Real gap_lo[3], gap_hi[3], reach2;  // in cells: to the faces of xi's cell, squared; h2
+
+  SPHFEM_HD CellRows(const GridView& g, const Vec3& xi, Real h2) {
+    g.coords(xi, ix, iy, iz);
+    x0 = ix > 0 ? ix - 1 : 0;
+    x1 = ix < g.nx - 1 ? ix + 1 : g.nx - 1;
+    y0 = iy > 0 ? iy - 1 : 0;
+    y1 = iy < g.ny - 1 ? iy + 1 : g.ny - 1;
+    z0 = iz > 0 ? iz - 1 : 0;
+    z1 = iz < g.nz - 1 ? iz + 1 : g.nz - 1;
+    const int own[3] = {ix, iy, iz};
+    for (int a = 0; a < 3; ++a) {
+      const Real f = (xi[a] - g.lo[a]) * g.inv_cell - Real(own[a]);
+      Real lo = f - Real(1e-4), hi = Real(1) - f - Real(1e-4);
+      lo = lo > Real(0) ? lo : Real(0);
+      hi = hi > Real(0) ? hi : Real(0);
+      gap_lo[a] = lo * lo;
+      gap_hi[a] = hi * hi;
+    }
+    reach2 = h2 * g.inv_cell * g.inv_cell;
+  }
+  SPHFEM_HD Real gap2(int a, int c, int own) const {
+    return c < own ? gap_lo[a] : (c > own ? gap_hi[a] : Real(0));
+  }
+  // The range [first, last] of row (y, z) within reach; false when none of it is.
+  SPHFEM_HD bool row(int y, int z, int& first, int& last) const {
+    const Real yz = gap2(1, y, iy) + gap2(2, z, iz);
+    if (!(yz < reach2)) return false;
+    first = x0 < ix && !(yz + gap_lo[0] < reach2) ? ix : x0;
+    last = x1 > ix && !(yz + gap_hi[0] < reach2) ? ix : x1;
+    return true;
+  }
+};
+
 // Calls f(j, rij, r2) for every particle j of `xs` (sorted into grid g) with
 // |xi - xj|^2 < h2, i itself included.
 template <class F>
 SPHFEM_HD void for_neighbors(const GridView& g, const Vec3* xs, const Vec3& xi, Real h2, F&& f) {
   if (g.nx == 0) return;
-  int ix, iy, iz;
-  g.coords(xi, ix, iy, iz);
-  const int x0 = ix > 0 ? ix - 1 : 0;
-  const int x1 = ix < g.nx - 1 ? ix + 1 : g.nx - 1;
-  const int z0 = iz > 0 ? iz - 1 : 0, z1 = iz < g.nz - 1 ? iz + 1 : g.nz - 1;
-  const int y0 = iy > 0 ? iy - 1 : 0, y1 = iy < g.ny - 1 ? iy + 1 : g.ny - 1;
-  for (int z = z0; z <= z1; ++z)
-    for (int y = y0; y <= y1; ++y) {
+  const CellRows c(g, xi, h2);
+  for (int z = c.z0; z <= c.z1; ++z)
+    for (int y = c.y0; y <= c.y1; ++y) {
+      int first, last;
+      if (!c.row(y, z, first, last)) continue;
       const int row = (z * g.ny + y) * g.nx;
-      const std::uint32_t end = g.start[row + x1 + 1];
-      for (std::uint32_t j = g.start[row + x0]; j < end; ++j) {
+      const std::uint32_t end = g.start[row + last + 1];
+      for (std::uint32_t j = g.start[row + first]; j < end; ++j) {
         const Vec3 rij = xi - xs[j];
         const Real r2 = norm2(rij);
         if (r2 < h2) f(j, rij, r2);
@@ -61,17 +99,14 @@ SPHFEM_HD void for_neighbors(const GridView& g, const Vec3* xs, const Vec3& xi, 
 SPHFEM_HD int collect_neighbors(const GridView& g, const Vec3* xs, const Vec3& xi, Real h2,
                                 std::uint32_t* list, std::size_t step, int last, int count) {
   if (g.nx == 0) return count;
-  int ix, iy, iz;
-  g.coords(xi, ix, iy, iz);
-  const int x0 = ix > 0 ? ix - 1 : 0;
-  const int x1 = ix < g.nx - 1 ? ix + 1 : g.nx - 1;
-  const int z0 = iz > 0 ? iz - 1 : 0, z1 = iz < g.nz - 1 ? iz + 1 : g.nz - 1;
-  const int y0 = iy > 0 ? iy - 1 : 0, y1 = iy < g.ny - 1 ? iy + 1 : g.ny - 1;
-  for (int z = z0; z <= z1; ++z)
-    for (int y = y0; y <= y1; ++y) {
+  const CellRows c(g, xi, h2);
+  for (int z = c.z0; z <= c.z1; ++z)
+    for (int y = c.y0; y <= c.y1; ++y) {
+      int first, end_cell;
+      if (!c.row(y, z, first, end_cell)) continue;
       const int row = (z * g.ny + y) * g.nx;
-      const std::uint32_t end = g.start[row + x1 + 1];
-      for (std::uint32_t j = g.start[row + x0]; j < end; ++j) {
+      const std::uint32_t end = g.start[row + end_cell + 1];
+      for (std::uint32_t j = g.start[row + first]; j < end; ++j) {
         const Vec3 rij = xi - xs[j];
         const bool hit = norm2(rij) < h2;
 #if defined(__CUDA_ARCH__)
