@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <set>
 #include <vector>
@@ -55,8 +56,9 @@ TEST(SphCells, CellStartsEqualBruteForce) {
   }
 }
 
-// density() stores each particle's fluid neighbours; for_fluid_neighbors must give them back
-// in the grid's order, in either layout, and they must be the brute-force neighbour set.
+// density() stores each particle's fluid neighbours; for_fluid_neighbors and for_fluid_pairs
+// (with the kernel's values) must give them back in the grid's order, in either layout, and
+// they must be the brute-force neighbour set.
 void check_lists(int nbr_cap_override) {
   CpuExec ex;
   const Real h = Real(0.1), d = Real(0.05);
@@ -135,6 +137,26 @@ void check_lists(int nbr_cap_override) {
     });
     ASSERT_EQ(host_order, grid_order) << "particle " << i;
     ASSERT_EQ(dev_order, grid_order) << "particle " << i;
+    // The pairs for_fluid_pairs hands over (chunked on the host) are the scalar kernel's.
+    for (const stages::FluidView* view : {&host, &dev}) {
+      std::size_t k = 0;
+      stages::for_fluid_pairs<true>(
+          *view, g, P.kernel, i, xs[i], P.h2,
+          [&](std::uint32_t j, const Vec3& r, Real r2, Real w, const Vec3& gw) {
+            ASSERT_LT(k, grid_order.size());
+            ASSERT_EQ(j, grid_order[k]);
+            const Vec3 rij = xs[i] - xs[j];
+            const Real rr = std::sqrt(norm2(rij));
+            EXPECT_EQ(r2, norm2(rij));
+            EXPECT_EQ(w, P.kernel.W(rr));
+            const Vec3 expect = P.kernel.grad(rij, rr);
+            EXPECT_TRUE(r.x == rij.x && r.y == rij.y && r.z == rij.z);
+            EXPECT_TRUE(gw.x == expect.x && gw.y == expect.y && gw.z == expect.z)
+                << "particle " << i << ", neighbour " << j;
+            ++k;
+          });
+      ASSERT_EQ(k, grid_order.size()) << "particle " << i;
+    }
     const int m = fb.nbr_n.data()[i];
     if (m < 0) {
       ++overflowed;
