@@ -16,6 +16,7 @@
 #include "sphfem/fem/solver.h"
 #include "sphfem/fem/tetrahedralize.h"
 #include "sphfem/io/atomic_file.h"
+#include "sphfem/sim/simulation.h"
 
 namespace {
 
@@ -58,7 +59,8 @@ struct Result {
 // The bunny at about `target` tetrahedra. TetGen has no count option: the coarsest mesh
 // (no quality refinement, no volume bound) is tried first, then quality 2, then a bisection
 // of the volume bound on a log scale until the count is within 5 %.
-TetMesh mesh_near(const SurfaceMesh& s, long target, std::string& switches) {
+TetMesh mesh_near(const SurfaceMesh& s, long target, std::string& switches,
+                  TetgenOptions* chosen = nullptr) {
   auto off = [&](const TetMesh& m) {
     return std::fabs(double(m.tets.size()) - double(target)) / double(target);
   };
@@ -87,6 +89,7 @@ TetMesh mesh_near(const SurfaceMesh& s, long target, std::string& switches) {
     }
   }
   switches = tetgen_switches(best_o);
+  if (chosen) *chosen = best_o;
   return best;
 }
 
@@ -113,6 +116,48 @@ Result run_case(const Case& c, Backend backend, int steps) {
          steps;
   r.prof = solver->profile();
   r.cg = double(r.prof.cg_iterations) / double(std::max(1L, r.prof.steps));
+  return r;
+}
+
+// The bunny standing free on the tank's floor, through a whole Simulation (bodies only): its
+// walls held inside the solve, and with fem.contact its surface tested against itself. Times
+// per step of the stages fem and body_contact, after it has settled.
+struct Resting {
+  long tets = 0;
+  double ms_fem = 0, ms_contact = 0, held = 0, pairs = 0;
+};
+
+Resting run_resting(const std::string& file, double scale, const Vec3d& offset,
+                    const TetgenOptions& o, bool contact, int steps) {
+  SceneSpec s;
+  s.path = "bench";
+  s.domain.lo = Vec3d(-0.2, 0, -0.2);
+  s.domain.hi = Vec3d(0.2, 0.3, 0.2);
+  BodySpec b;
+  b.name = "bunny";
+  b.shape = BodyShape::Mesh;
+  b.file = std::filesystem::absolute(file).string();
+  b.scale = scale;
+  b.offset = offset;
+  b.quality = o.quality;
+  b.max_volume = o.max_volume;
+  b.material.density = 1000.0, b.material.young = 1e5, b.material.poisson = 0.3;
+  b.material.beta = 0.002;
+  s.bodies.push_back(b);
+  s.fem.contact = contact;
+  Simulation sim(s, Backend::Cpu);
+  for (int i = 0; i < 100; ++i) sim.step(kDt);  // lands (it starts a millimetre up) and settles
+  sim.reset_profile();
+  (void)sim.take_body_contact_tally();
+  for (int i = 0; i < steps; ++i) sim.step(kDt);
+  const StepProfile& p = sim.profile();
+  const BodyContactTally t = sim.take_body_contact_tally();
+  Resting r;
+  r.tets = long(sim.bodies_model().tets.size());
+  r.ms_fem = p.ms[int(Stage::Fem)] / steps;
+  r.ms_contact = p.ms[int(Stage::BodyContact)] / steps;
+  r.held = double(t.held) / double(std::max(1L, t.steps));
+  r.pairs = double(t.pairs) / double(std::max(1L, t.steps));
   return r;
 }
 
@@ -201,6 +246,43 @@ int run_fem_bench(const BenchOptions& opt) {
            "ms_solve,ms_integrate,ms_step,cg_iterations,paper_tets,paper_gpu_ms\n";
     f << csv;
     std::printf("\nresults appended to %s\n", path.c_str());
+  }
+  if (!bunny.tris.empty() && backend == Backend::Cpu) {
+    // The same bunny at about 22k tetrahedra standing free on the floor, contact on and off.
+    const std::string file = opt.mesh.empty() ? "build/assets/bunny.obj" : opt.mesh;
+    const SurfaceMesh raw = load_surface(file);
+    const auto [lo, hi] = bounds(raw.x);
+    const double scale = kBodySize / (hi.y - lo.y);
+    const Vec3d centre = (lo + hi) * 0.5;
+    const Vec3d offset(-centre.x * scale, 0.001 - lo.y * scale, -centre.z * scale);
+    std::string switches;
+    TetgenOptions o;
+    mesh_near(bunny, kBunnyTargets[1], switches, &o);
+    std::printf("\nresting on the floor (walls inside the solve), %d steps after 100:\n",
+                opt.steps);
+    std::printf("%-22s %7s %9s %13s %10s %8s\n", "", "tets", "ms fem", "ms contact", "held",
+                "pairs");
+    std::string rows;
+    for (bool contact : {false, true}) {
+      const Resting r = run_resting(file, scale, offset, o, contact, opt.steps);
+      std::printf("%-22s %7ld %9.2f %8.2f (%2.0f%%) %10.1f %8.1f\n",
+                  contact ? "fem.contact on" : "fem.contact off", r.tets, r.ms_fem, r.ms_contact,
+                  100.0 * r.ms_contact / r.ms_fem, r.held, r.pairs);
+      std::snprintf(line, sizeof line, "%s,\"%s\",%d,bunny_resting,%ld,%d,%d,%.3f,%.3f,%.1f,%.1f\n",
+                    date, device.c_str(), cpu_threads(), r.tets, int(contact), opt.steps, r.ms_fem,
+                    r.ms_contact, r.held, r.pairs);
+      rows += line;
+    }
+    if (!opt.out_dir.empty()) {
+      const std::string path = opt.out_dir + "/fem_contact.csv";
+      const bool fresh = !std::filesystem::exists(path);
+      std::ofstream f(path, std::ios::app);
+      if (fresh)
+        f << "date,device,threads,case,tets,surface_contact,steps,ms_fem,ms_body_contact,"
+             "wall_held_nodes,contact_pairs\n";
+      f << rows;
+      std::printf("results appended to %s\n", path.c_str());
+    }
   }
   return 0;
 }

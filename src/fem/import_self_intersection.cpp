@@ -99,11 +99,11 @@ bool pair_crosses(const SurfaceMesh& s, const Tri& ta, const Tri& tb, double tol
   return triangles_cross(a, b, tol, shared == 1 ? tol : -tol);
 }
 
-}  // namespace
-
-std::pair<int, int> find_self_intersection(const SurfaceMesh& s) {
+// Calls visit(ta, tb, tol) once for each pair of triangles whose bounds overlap.
+template <class Visit>
+void overlapping_pairs(const SurfaceMesh& s, Visit&& visit) {
   const int nt = int(s.tris.size());
-  if (nt < 2) return {-1, -1};
+  if (nt < 2) return;
   const auto [lo, hi] = bounds(s.x);
   const double tol = 1e-9 * norm(hi - lo);
 
@@ -140,7 +140,6 @@ std::pair<int, int> find_self_intersection(const SurfaceMesh& s) {
   }
   std::sort(entries.begin(), entries.end());
 
-  std::pair<int, int> first{-1, -1};
   for (std::size_t g = 0; g < entries.size();) {
     std::size_t e = g + 1;
     while (e < entries.size() && entries[e].first == entries[g].first) ++e;
@@ -153,13 +152,30 @@ std::pair<int, int> find_self_intersection(const SurfaceMesh& s) {
         const Vec3d c = olo - Vec3d(tol, tol, tol);
         if (key(cell(c.x, lo.x) + 1, cell(c.y, lo.y) + 1, cell(c.z, lo.z) + 1) != entries[g].first)
           continue;
-        const std::pair<int, int> pr{std::min(ta, tb), std::max(ta, tb)};
-        if (first.first >= 0 && pr >= first) continue;  // report the lowest pair
-        if (pair_crosses(s, s.tris[ta], s.tris[tb], tol)) first = pr;
+        visit(std::min(ta, tb), std::max(ta, tb), tol);
       }
     g = e;
   }
+}
+
+}  // namespace
+
+std::pair<int, int> find_self_intersection(const SurfaceMesh& s) {
+  std::pair<int, int> first{-1, -1};
+  overlapping_pairs(s, [&](int ta, int tb, double tol) {
+    const std::pair<int, int> pr{ta, tb};
+    if (first.first >= 0 && pr >= first) return;  // report the lowest pair
+    if (pair_crosses(s, s.tris[ta], s.tris[tb], tol)) first = pr;
+  });
   return first;
+}
+
+long count_self_intersections(const SurfaceMesh& s) {
+  long n = 0;
+  overlapping_pairs(s, [&](int ta, int tb, double tol) {
+    if (pair_crosses(s, s.tris[ta], s.tris[tb], tol)) ++n;
+  });
+  return n;
 }
 
 }  // namespace sphfem

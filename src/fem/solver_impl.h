@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "fem/stages.h"
+#include "fem/wall_stages.h"
 #include "sphfem/core/memory.h"
 #include "sphfem/fem/solver.h"
 
@@ -34,10 +35,13 @@ class BodySolverT final : public BodySolver {
     upload(inc_, m.inc);
     upload(x_, m.x0);
     upload(v_, m.v0);
-    for (Buffer<Vec3>* b : {&dv_, &delta_, &u_, &b_, &r_, &z_, &p_, &q_, &impulse_, &staging_})
+    for (Buffer<Vec3>* b :
+         {&dv_, &delta_, &u_, &b_, &r_, &z_, &p_, &q_, &impulse_, &staging_, &wall_f_})
       *b = Buffer<Vec3>(s, n_);
     for (Buffer<Vec3>* b : {&dv_, &impulse_}) b->zero();
     pinv_ = Buffer<fem::Sym3>(s, n_);
+    wall_mask_ = Buffer<std::uint8_t>(s, n_);
+    wall_mask_.zero();
     P_ = Buffer<Vec3>(s, std::size_t(3) * ne_);
     fe_ = Buffer<Vec3>(s, std::size_t(4) * ne_);
     std::vector<Quat> q0(ne_, Quat::identity());
@@ -79,10 +83,10 @@ class BodySolverT final : public BodySolver {
       });
       timed(prof_.ms_solve, [&] {
         if (k == 0) {
-          solve(dt, dv_, warm_, info);
+          solve_with_walls(dt, info);
           warm_ = true;
         } else {
-          solve(dt, delta_, false, info);
+          solve(dt, delta_, false, info, held_ ? wall_mask_.data() : nullptr);
           fem::accumulate(ex_, n_, delta_.data(), dv_.data());
         }
       });
@@ -329,15 +333,50 @@ class BodySolverT final : public BodySolver {
     return fem::apply_nodes(ex_, nodes(), fe_.data(), p, dt, q);
   }
 
+  // The first solve of a step with the tank's walls as constraints (fem/wall_stages.h): nodes
+  // resting on a wall or heading out of the box are held on it; after the solve, walls that
+  // pull let go, nodes now heading out are held, friction from the walls' impulses joins the
+  // right-hand side, and the step is solved once more (warm-started). A step that touches no
+  // wall is the plain solve; what the second solve still sends out of the box, the last-resort
+  // projection after the step puts back.
+  void solve_with_walls(Real dt, BodyStepInfo& info) {
+    const FemSettings& S = model_.settings;
+    held_ = false;
+    if (!S.box) {
+      solve(dt, dv_, warm_, info);
+      return;
+    }
+    const fem::NodeView nv = nodes();
+    const Vec3 lo(S.box_lo), hi(S.box_hi);
+    const fem::WallBox box{lo, hi, Real(1e-5) * norm(hi - lo)};
+    std::uint8_t* mask = wall_mask_.data();
+    held_ = fem::hold_walls(ex_, nv, x_.data(), v_.data(), kNone, box, dt, mask, dv_.data()) > 0;
+    solve(dt, dv_, warm_ || held_, info, held_ ? mask : nullptr);
+    if (held_) {
+      apply(dt, dv_.data(), q_.data());
+      fem::wall_force(ex_, n_, q_.data(), b_.data(), wall_f_.data());
+    }
+    const int changed =
+        fem::hold_walls(ex_, nv, x_.data(), v_.data(), wall_f_.data(), box, dt, mask, dv_.data());
+    if (!held_ && changed == 0) return;
+    if (!held_) wall_f_.zero();  // nodes held from now on: no normal impulse known yet
+    held_ = true;
+    info.held = fem::wall_friction(ex_, nv, mask, wall_f_.data(), v_.data(), dv_.data(),
+                                   Real(S.friction), b_.data());
+    solve(dt, dv_, true, info, mask);
+  }
+
   // Preconditioned CG on A x = b, from x's current value when `warm` (the last step's
-  // velocity change), else from zero. Adds its iterations to info.
-  void solve(Real dt, Buffer<Vec3>& xb, bool warm, BodyStepInfo& info) {
+  // velocity change), else from zero. Adds its iterations to info. With a wall mask, the held
+  // components of x keep their values (filtered CG) and a warm start is always kept.
+  void solve(Real dt, Buffer<Vec3>& xb, bool warm, BodyStepInfo& info,
+             const std::uint8_t* mask = nullptr) {
     const FemSettings& S = model_.settings;
     Vec3* x = xb.data();
     // |b|^2 in the preconditioner's norm, the scale the tolerance is relative to.
     const double bb =
         fem::cg_start(ex_, n_, b_.data(), kNone, pinv_.data(), r_.data(), z_.data(), p_.data());
-    if (!(bb > 0.0)) {
+    if (!(bb > 0.0) && !(mask && bb == 0.0)) {
       xb.zero();
       if (!(bb == 0.0)) throw_not_finite();
       return;
@@ -346,14 +385,17 @@ class BodySolverT final : public BodySolver {
     if (warm) {
       apply(dt, x, q_.data());
       rz = fem::cg_start(ex_, n_, b_.data(), q_.data(), pinv_.data(), r_.data(), z_.data(),
-                         p_.data());
-      if (!(rz < bb)) {  // a worse start than zero: begin from zero
+                         p_.data(), mask);
+      if (!(rz < bb) && !mask) {  // a worse start than zero: begin from zero
         xb.zero();
         rz =
             fem::cg_start(ex_, n_, b_.data(), kNone, pinv_.data(), r_.data(), z_.data(), p_.data());
       }
     } else {
       xb.zero();
+      if (mask)
+        rz = fem::cg_start(ex_, n_, b_.data(), kNone, pinv_.data(), r_.data(), z_.data(), p_.data(),
+                           mask);
     }
     const double target = S.cg_tolerance * S.cg_tolerance * bb;
     int it = 0;
@@ -361,7 +403,7 @@ class BodySolverT final : public BodySolver {
       const double pq = apply(dt, p_.data(), q_.data());
       if (!(pq > 0.0)) break;  // converged to round-off, or a non-finite state
       const double rz_new = fem::cg_update(ex_, n_, Real(rz / pq), p_.data(), q_.data(),
-                                           pinv_.data(), x, r_.data(), z_.data());
+                                           pinv_.data(), x, r_.data(), z_.data(), mask);
       ++it;
       if (rz_new > target) fem::cg_direction(ex_, n_, Real(rz_new / rz), z_.data(), p_.data());
       rz = rz_new;
@@ -384,6 +426,9 @@ class BodySolverT final : public BodySolver {
   Real last_dt_ = 0;
   long steps_ = 0;
   bool warm_ = false, has_forces_ = false, has_impulses_ = false, impulses_exposed_ = false;
+  bool held_ = false;  // some node is held by a wall in this step's solve
+  Buffer<std::uint8_t> wall_mask_;
+  Buffer<Vec3> wall_f_;
   Buffer<Tet> tets_;
   Buffer<Tri> surface_;
   Buffer<Vec3> grad_;

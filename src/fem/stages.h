@@ -210,13 +210,24 @@ double apply_nodes(Exec& ex, const NodeView nv, const Vec3* fe, const Vec3* p, R
   });
 }
 
-// CG start: r = b - q (q = A x0, or null for x0 = 0), z = Pinv r, p = z; returns r . z.
+// The components a wall holds (mask bit c: axis c, see hold_walls) taken out of a.
+SPHFEM_HD Vec3 free_part(Vec3 a, std::uint8_t m) {
+  if (m & 1) a.x = Real(0);
+  if (m & 2) a.y = Real(0);
+  if (m & 4) a.z = Real(0);
+  return a;
+}
+
+// CG start: r = b - q (q = A x0, or null for x0 = 0), z = Pinv r, p = z; returns r . z. With
+// a mask, r and z lose the held components (Baraff & Witkin's filtered PCG).
 template <class Exec>
 double cg_start(Exec& ex, int n, const Vec3* b, const Vec3* q, const Sym3* pinv, Vec3* r, Vec3* z,
-                Vec3* p) {
+                Vec3* p, const std::uint8_t* mask = nullptr) {
   return reduce_sum(ex, n, [=] SPHFEM_LAMBDA(int i) -> double {
-    const Vec3 ri = q ? b[i] - q[i] : b[i];
-    const Vec3 zi = pinv[i] * ri;
+    Vec3 ri = q ? b[i] - q[i] : b[i];
+    if (mask) ri = free_part(ri, mask[i]);
+    Vec3 zi = pinv[i] * ri;
+    if (mask) zi = free_part(zi, mask[i]);
     r[i] = ri;
     z[i] = zi;
     p[i] = zi;
@@ -224,14 +235,16 @@ double cg_start(Exec& ex, int n, const Vec3* b, const Vec3* q, const Sym3* pinv,
   });
 }
 
-// x += a p, r -= a q, z = Pinv r; returns r . z.
+// x += a p, r -= a q, z = Pinv r; returns r . z. With a mask as cg_start.
 template <class Exec>
 double cg_update(Exec& ex, int n, Real a, const Vec3* p, const Vec3* q, const Sym3* pinv, Vec3* x,
-                 Vec3* r, Vec3* z) {
+                 Vec3* r, Vec3* z, const std::uint8_t* mask = nullptr) {
   return reduce_sum(ex, n, [=] SPHFEM_LAMBDA(int i) -> double {
     x[i] += p[i] * a;
-    const Vec3 ri = r[i] - q[i] * a;
-    const Vec3 zi = pinv[i] * ri;
+    Vec3 ri = r[i] - q[i] * a;
+    if (mask) ri = free_part(ri, mask[i]);
+    Vec3 zi = pinv[i] * ri;
+    if (mask) zi = free_part(zi, mask[i]);
     r[i] = ri;
     z[i] = zi;
     return double(dot(ri, zi));

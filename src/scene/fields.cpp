@@ -567,7 +567,17 @@ const ObjectTable& fem_table() {
                    "Iterations of the element-rotation extraction per linearisation, started "
                    "from the last step's rotations.")
           .number("friction", &FemSpec::friction, "-", kNonNegative,
-                  "Coulomb friction coefficient of body nodes sliding on the tank walls.")
+                  "Coulomb friction coefficient of body nodes sliding on the tank walls and "
+                  "the obstacles, and of body surfaces sliding on each other.")
+          .boolean("contact", &FemSpec::contact,
+                   "Body surfaces meet each other and themselves (a fold, two balls): "
+                   "vertex-face and edge-edge contact after each step, pushed apart to "
+                   "`contact_gap` with inelastic impulses and `friction`, and the step taken "
+                   "again with the contact's impulses. Experimental: a soft bunny whose folds "
+                   "close under a jet still blows up (docs/validation.md).")
+          .number("contact_gap", &FemSpec::contact_gap, "m", kNonNegative,
+                  "Distance kept between touching surfaces; 0 is a tenth of the median "
+                  "surface edge at rest.")
           .build();
   return t;
 }

@@ -60,7 +60,12 @@ std::vector<std::string> gauge_columns(const SceneSpec& scene) {
                                 "contacts",
                                 "momentum_total_x",
                                 "momentum_total_y",
-                                "momentum_total_z"};
+                                "momentum_total_z",
+                                "body_contacts",
+                                "wall_held",
+                                "min_surface_gap",
+                                "inverted_elements",
+                                "intersecting_pairs"};
   for (int k = 0; k < int(Stage::Count); ++k)
     c.push_back(std::string("ms_") + stage_name(Stage(k)));
   c.push_back("ms_leak_check");
@@ -366,6 +371,14 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
                                p_total.x,
                                p_total.y,
                                p_total.z};
+    {
+      const BodyContactTally ct = fem ? sim.take_body_contact_tally() : BodyContactTally();
+      const double per_step = ct.steps ? 1.0 / double(ct.steps) : 0.0;
+      row.insert(row.end(), {double(ct.pairs) * per_step, double(ct.held) * per_step,
+                             std::isfinite(ct.min_gap) ? ct.min_gap : -1.0,
+                             fem ? double(inverted_elements(bodies, body_snap.x)) : 0.0,
+                             fem ? double(intersecting_pairs(bodies, body_snap.x)) : 0.0});
+    }
     for (int k = 0; k < int(Stage::Count); ++k) row.push_back(prof.ms[k] * per);
     row.push_back(hs.ms_leak_check * per);
     row.push_back(prof.total() * per);

@@ -45,6 +45,12 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
                                  bodies_model_.surface, bodies_model_.nodes);
   }
   if (fluid_ && bodies_) inside_check_ = make_collider(Backend::Cpu);
+  if (bodies_ && scene.fem.contact) {
+    ContactSettings cs;
+    cs.gap = scene.fem.contact_gap;
+    cs.friction = scene.fem.friction;
+    contact_ = std::make_unique<SurfaceContact>(bodies_model_, cs);
+  }
   if (bodies_ && !obstacles_.empty()) {
     obstacle_check_ = make_collider(Backend::Cpu);
     obstacle_check_->build(obstacles_.x, obstacles_.tris);
@@ -119,7 +125,7 @@ StepInfo Simulation::step(double dt_limit) {
   ++profile_.steps;
   if (!fluid_) {  // bodies alone, in steps of dt_limit
     info.dt = dt_limit;
-    timed(Stage::Fem, [&] { step_bodies(dt_limit); });
+    step_bodies(dt_limit);
     t_bodies_ += dt_limit;
     return info;
   }
@@ -136,7 +142,7 @@ StepInfo Simulation::step(double dt_limit) {
     f.pressure(info);
     if (c) c->before_bodies(f.arrays());
   });
-  if (bodies_) timed(Stage::Fem, [&] { step_bodies(dt); });
+  if (bodies_) step_bodies(dt);
   DriftLimits limits;
   if (c) timed(Stage::Collide, [&] { limits = c->cast(f.arrays(), dt); });
   timed(Stage::Drift, [&] { f.drift(limits, info); });
@@ -148,43 +154,107 @@ StepInfo Simulation::step(double dt_limit) {
   return info;
 }
 
+// The implicit step, then what it cannot see: obstacles, and surfaces meeting each other.
+// Surface contact is found after the step; when there is some, the step is taken again from
+// its start with the contact's impulses in it, so the whole body feels them within the step
+// (an impulse on the surface alone, after it, lets the body run on into the squeezed surface
+// and the elastic energy grows past what the motion brought), and the contact is resolved
+// once more after it.
 void Simulation::step_bodies(double dt) {
-  BodyStepInfo b;
   std::vector<Vec3> before;
-  if (obstacle_check_) {
+  const bool contacts = obstacle_check_ || contact_;
+  BodyStepInfo b;
+  auto implicit_step = [&] {
+    try {
+      b = bodies_->step(dt);
+    } catch (const std::runtime_error& e) {
+      throw BodyStepError(e.what());  // the solver's own check: a non-finite right-hand side
+    }
+    if (!std::isfinite(b.cg_residual)) throw BodyStepError("the body solve became non-finite");
+  };
+  ++tally_.steps;
+  timed(Stage::Fem, [&] {
+    if (contacts) {
+      BodySnapshot s;
+      bodies_->snapshot(s);
+      before = std::move(s.x);
+    }
+    if (contact_) bodies_->save(step_start_);
+    implicit_step();
+  });
+  if (!contacts) {
+    tally_.held += b.held;
+    return;
+  }
+  timed(Stage::BodyContact, [&] {
     BodySnapshot s;
-    bodies_->snapshot(s);
-    before = std::move(s.x);
-  }
-  try {
-    b = bodies_->step(dt);
-  } catch (const std::runtime_error& e) {
-    throw BodyStepError(e.what());  // the solver's own check: a non-finite right-hand side
-  }
-  if (!std::isfinite(b.cg_residual)) throw BodyStepError("the body solve became non-finite");
-  if (obstacle_check_) collide_obstacles(before);
+    std::vector<std::uint8_t> moved;
+    auto resolve = [&] {
+      bodies_->snapshot(s);
+      moved.assign(s.x.size(), 0);
+      if (obstacle_check_) collide_obstacles(before, s.x, s.v, moved);
+      if (!contact_) return;
+      std::vector<std::uint8_t> pushed;
+      last_contact_ = contact_->resolve(before, s.x, s.v, dt, pushed);
+      for (std::size_t i = 0; i < moved.size(); ++i) moved[i] |= pushed[i];
+    };
+    resolve();
+    // Each pass adds the impulses the contact still had to apply after the last one: the
+    // body's response to an impulse inside the step is softer than a free node's, so one pass
+    // leaves fast approaches still closing.
+    std::vector<Vec3> J;
+    const ContactStats first = last_contact_;
+    for (int pass = 0; contact_ && pass < kContactPasses && last_contact_.pairs > 0; ++pass) {
+      const std::vector<Vec3> v_after = s.v;
+      bodies_->snapshot(s);  // the velocities the step gave, before any contact
+      J.resize(s.v.size());
+      for (std::size_t i = 0; i < J.size(); ++i)
+        J[i] += (v_after[i] - s.v[i]) * bodies_model_.mass[i];
+      bodies_->load(step_start_);
+      bodies_->add_node_impulses(J);
+      implicit_step();
+      resolve();
+      if (!(last_contact_.min_gap < 0.5 * contact_->gap())) break;  // closing no more
+    }
+    last_contact_.pairs = std::max(last_contact_.pairs, first.pairs);
+    std::vector<int> nodes;
+    std::vector<Vec3> x, v;
+    for (std::size_t i = 0; i < moved.size(); ++i)
+      if (moved[i]) {
+        nodes.push_back(int(i));
+        x.push_back(s.x[i]);
+        v.push_back(s.v[i]);
+      }
+    if (!nodes.empty()) bodies_->set_nodes(nodes, x, v);
+  });
+  tally_.held += b.held;
+  tally_.pairs += last_contact_.pairs;
+  tally_.min_gap = std::min(tally_.min_gap, last_contact_.min_gap);
+}
+
+BodyContactTally Simulation::take_body_contact_tally() {
+  const BodyContactTally t = tally_;
+  tally_ = BodyContactTally();
+  return t;
 }
 
 // Nodes whose path over the step met an obstacle's face go back to the side they came from, a
 // small gap off the face; the velocity into the face is removed and the tangential one loses
 // fem.friction times the removed normal speed (Coulomb, as on the tank's walls). Done on the
 // host after the step: a projection, like the walls', not a constraint inside the solve.
-void Simulation::collide_obstacles(const std::vector<Vec3>& before) {
-  BodySnapshot s;
-  bodies_->snapshot(s);
+void Simulation::collide_obstacles(const std::vector<Vec3>& before, std::vector<Vec3>& xs,
+                                   std::vector<Vec3>& vs, std::vector<std::uint8_t>& moved) {
   const Real gap = Real(1e-5 * norm(scene_.domain.hi - scene_.domain.lo));
   // Each node's path over the step as a ray from where it was (the obstacles do not move).
-  std::vector<Vec3> dir(s.x.size());
-  std::vector<Real> len(s.x.size());
-  for (std::size_t i = 0; i < s.x.size(); ++i) {
-    const Vec3 d = s.x[i] - before[i];
+  std::vector<Vec3> dir(xs.size());
+  std::vector<Real> len(xs.size());
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    const Vec3 d = xs[i] - before[i];
     len[i] = norm(d);
     dir[i] = len[i] > Real(0) ? d / len[i] : Vec3(0, 1, 0);
   }
   const std::vector<collide::RayHit> hit = obstacle_check_->cast_rays(before, dir, len);
   const Real mu = Real(scene_.fem.friction);
-  std::vector<int> nodes;
-  std::vector<Vec3> x, v;
   for (std::size_t i = 0; i < hit.size(); ++i) {
     if (hit[i].face < 0 || !(len[i] > Real(0))) continue;
     const Tri& t = obstacles_.tris[std::size_t(hit[i].face)];
@@ -194,7 +264,7 @@ void Simulation::collide_obstacles(const std::vector<Vec3>& before) {
     n = n / norm(n);
     if (dot(before[i] - a, n) < Real(0)) n = -n;  // toward the side the node came from
     const Vec3 p = before[i] + dir[i] * hit[i].t;
-    Vec3 vi = s.v[i];
+    Vec3 vi = vs[i];
     const Real vn = dot(vi, n);
     if (vn < Real(0)) {
       const Vec3 vt = vi - n * vn;
@@ -202,11 +272,10 @@ void Simulation::collide_obstacles(const std::vector<Vec3>& before) {
       const Real keep = st > -mu * vn ? Real(1) + mu * vn / st : Real(0);
       vi = vt * keep;
     }
-    nodes.push_back(int(i));
-    x.push_back(p + n * gap);
-    v.push_back(vi);
+    xs[i] = p + n * gap;
+    vs[i] = vi;
+    moved[i] = 1;
   }
-  if (!nodes.empty()) bodies_->set_nodes(nodes, x, v);
 }
 
 void Simulation::reset_profile() {

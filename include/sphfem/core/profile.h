@@ -9,6 +9,8 @@
 //   pressure     DFSPH: the density solve -> v*; the samples' and the near-surface pressure
 //                impulses go to the body nodes
 //   fem          the bodies' implicit step over the same dt
+//   body_contact the bodies' nodes against the obstacles, and their surfaces against each
+//                other and themselves
 //   collide      BVH refit, one ray per particle along its motion relative to the surfaces
 //   drift        x += dt v*, limited a skin short of the nearest hit (paper eq. 6)
 //   contact_fix  exact contact test of each path against the moving faces, and its fix
@@ -26,6 +28,7 @@ enum class Stage {
   Forces,
   Pressure,
   Fem,
+  BodyContact,
   Collide,
   Drift,
   ContactFix,

@@ -56,6 +56,9 @@ void check_surface(const SurfaceMesh& s);
 // touch.
 // Zero-area triangles have no plane to test against; check_surface rejects them first.
 std::pair<int, int> find_self_intersection(const SurfaceMesh& s);
+// Pairs of triangles that intersect other than where they must touch (the test above); for
+// surfaces in motion (bodies' contact gauges).
+long count_self_intersections(const SurfaceMesh& s);
 
 // --- tetrahedral meshes ---
 

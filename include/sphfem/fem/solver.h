@@ -33,7 +33,8 @@ struct BodySnapshot {
 struct BodyStepInfo {
   int cg_iterations = 0;
   double cg_residual = 0;  // preconditioned residual norm relative to the right-hand side
-  int contacts = 0;        // nodes the box pushed back this step
+  int contacts = 0;        // nodes the box pushed back after the step (a last resort)
+  int held = 0;            // nodes the tank's walls held inside the step's solve
 };
 
 struct BodyProfile {

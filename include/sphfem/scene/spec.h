@@ -136,7 +136,9 @@ struct FemSpec {
   int cg_max_iterations = FemSettings{}.cg_max_iterations;
   int newton_iterations = FemSettings{}.newton_iterations;
   int rotation_iterations = FemSettings{}.rotation_iterations;
-  double friction = FemSettings{}.friction;  // Coulomb, nodes sliding on the tank walls
+  double friction = FemSettings{}.friction;  // Coulomb, nodes on walls, obstacles, surfaces
+  bool contact = false;                      // surfaces meet each other and themselves
+  double contact_gap = 0;                    // m, kept between touching surfaces; 0: auto
 };
 
 enum class CouplingMethod { RayTraced, BoundaryParticles };

@@ -3,12 +3,14 @@
 // with the runner (run.h).
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <vector>
 
 #include "sphfem/collide/collider.h"
 #include "sphfem/core/profile.h"
 #include "sphfem/couple/ray_coupling.h"
+#include "sphfem/fem/contact.h"
 #include "sphfem/fem/model.h"
 #include "sphfem/fem/solver.h"
 #include "sphfem/scene/compile.h"
@@ -19,6 +21,14 @@
 #include "sphfem/sph/solver.h"
 
 namespace sphfem {
+
+// What the bodies' contacts did over the steps since the last take_body_contact_tally().
+struct BodyContactTally {
+  long steps = 0;
+  long pairs = 0;  // surface contact pairs (fem/contact.h), summed over the steps
+  long held = 0;   // nodes the tank's walls held inside the solve, summed over the steps
+  double min_gap = std::numeric_limits<double>::infinity();  // m, over the steps' pairs
+};
 
 // One coupled step is Simulation::step, read top to bottom: its stages (core/profile.h) are
 // named calls on the fluid solver, the body solver and the coupling, each timed into one
@@ -77,12 +87,19 @@ class Simulation {
   long carved_particles() const { return carved_; }
   const BodiesModel& bodies_model() const { return bodies_model_; }
   const ObstaclesModel& obstacles() const { return obstacles_; }
+  // The last step's surface contact (empty stats without fem.contact or bodies); the gap the
+  // surfaces keep (0 without).
+  const ContactStats& last_contact() const { return last_contact_; }
+  // The contacts since the last call, and a fresh count from now on.
+  BodyContactTally take_body_contact_tally();
+  double contact_gap() const { return contact_ ? contact_->gap() : 0.0; }
 
  private:
   template <class F>
   void timed(Stage s, F&& fn);
   void step_bodies(double dt);
-  void collide_obstacles(const std::vector<Vec3>& before);
+  void collide_obstacles(const std::vector<Vec3>& before, std::vector<Vec3>& x,
+                         std::vector<Vec3>& v, std::vector<std::uint8_t>& moved);
 
   SceneSpec scene_;
   FluidModel fluid_model_;
@@ -93,6 +110,11 @@ class Simulation {
   std::unique_ptr<Collider> inside_check_;
   ObstaclesModel obstacles_;
   std::unique_ptr<Collider> obstacle_check_;  // body nodes against the obstacles
+  std::unique_ptr<SurfaceContact> contact_;   // body surfaces against each other
+  ContactStats last_contact_;
+  BodyState step_start_;  // the bodies at the start of the step, for its contact pass
+  BodyContactTally tally_;
+  static constexpr int kContactPasses = 3;  // implicit steps again with the contact's impulses
   StepProfile profile_;
   double t_bodies_ = 0;  // without fluid
   long carved_ = 0;

@@ -1,0 +1,97 @@
+// Contact between body surfaces: a body touching itself (a fold, a crushed foot) or another
+// body. Vertex-face pairs over all bodies' surface triangles, resolved after each implicit
+// step, on the host, so that every backend shares one implementation.
+//
+// The response is a split impulse (as in rigid-body engines): positions are pushed apart to
+// the gap without a velocity of their own, so closing an overlap creates no kinetic energy;
+// velocities get inelastic normal impulses with Coulomb friction, each shared between the
+// vertex and the face's corners by their barycentric weights and inverse masses, so total
+// momentum is exact up to round-off. Vertex-face and edge-edge pairs are both tested. The
+// guarantee is bounded penetration, not none: a crossing within the step is caught when its
+// depth is within what the surfaces moved that step (docs/design.md).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "sphfem/collide/traverse.h"
+#include "sphfem/fem/model.h"
+
+namespace sphfem {
+
+struct ContactSettings {
+  double gap = 0;         // m, the distance kept between a vertex and a face; 0: default_gap
+  double friction = 0.5;  // Coulomb coefficient between the surfaces
+  int rounds = 4;         // detections per step (a push may make new contacts)
+  int sweeps = 4;         // Gauss-Seidel sweeps over the contacts per detection
+};
+
+struct ContactStats {
+  int pairs = 0;   // vertex-face pairs pushed apart or stopped this step
+  int rounds = 0;  // detections run
+  int nodes = 0;   // nodes whose position or velocity changed
+  // m, the smallest signed vertex-face distance among the candidate pairs after the
+  // response (negative: a vertex still behind a face); +inf when no pair was near.
+  double min_gap = std::numeric_limits<double>::infinity();
+};
+
+class SurfaceContact {
+ public:
+  // Throws std::invalid_argument for a negative gap or friction.
+  SurfaceContact(const BodiesModel& model, const ContactSettings& settings);
+
+  double gap() const { return gap_; }
+
+  // A step from x_old to x (v the velocities after it), dt seconds: pairs found and resolved
+  // in place. moved[i] is set for each node changed (sized to the node count).
+  ContactStats resolve(const std::vector<Vec3>& x_old, std::vector<Vec3>& x, std::vector<Vec3>& v,
+                       double dt, std::vector<std::uint8_t>& moved);
+
+  // A tenth of the median surface edge at rest.
+  static double default_gap(const BodiesModel& model);
+
+ private:
+  // A vertex p against face f, or (f < 0) edge p against edge -f - 1 (edges_ indices), with
+  // an edge pair's normal fixed at the step's start.
+  struct Pair {
+    int p, f;
+    Vec3 n;
+  };
+  // Four nodes with weights summing to zero, the normal and the signed distance along it.
+  struct Contact {
+    int node[4];
+    Real w[4];
+    Vec3 n;
+    Real d;
+  };
+  void refit(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x);
+  void detect(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x, std::vector<Pair>& out);
+  bool vertex_face(int p, int f, const std::vector<Vec3>& x_old, const std::vector<Vec3>& x) const;
+  bool edge_edge(int e, int g, const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
+                 Vec3& n) const;
+  bool contact(const Pair& c, const std::vector<Vec3>& x, Contact& out) const;
+
+  std::vector<Vec3> x0_;  // rest positions: same-body faces near a vertex at rest never count
+  std::vector<Tri> tris_;
+  std::vector<int> tri_body_, node_body_, verts_;
+  std::vector<std::array<int, 2>> edges_;  // unique surface edges
+  std::vector<std::array<int, 3>> tri_edges_;
+  std::vector<Real> inv_mass_;  // 0 on pinned nodes
+  std::vector<collide::BvhNode> tree_;
+  std::vector<int> prims_;
+  double area0_ = 0;
+  double gap_ = 0, friction_ = 0;
+  int rounds_ = 4, sweeps_ = 4;
+  bool box_ = false;
+  Vec3 box_lo_, box_hi_;
+};
+
+// Elements whose signed volume at x does not have its sign at rest.
+int inverted_elements(const BodiesModel& model, const std::vector<Vec3>& x);
+// Pairs of the bodies' surface triangles that intersect at x, by the exact test of
+// fem/import.h (count_self_intersections), independent of the contact's own.
+long intersecting_pairs(const BodiesModel& model, const std::vector<Vec3>& x);
+
+}  // namespace sphfem

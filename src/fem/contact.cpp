@@ -1,0 +1,428 @@
+// Vertex-face contact between body surfaces (sphfem/fem/contact.h): candidates from a host
+// BVH over the faces' swept boxes, positions projected apart by Gauss-Seidel sweeps, then
+// inelastic impulses with Coulomb friction on the pairs that touched.
+#include "sphfem/fem/contact.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+
+#include "collide/host_build.h"
+#include "sphfem/collide/geometry.h"
+#include "sphfem/fem/import.h"
+
+namespace sphfem {
+
+namespace {
+
+using collide::BvhNode;
+
+Real box_area(const Vec3& lo, const Vec3& hi) {
+  const Vec3 d = hi - lo;
+  return d.x * d.y + d.y * d.z + d.z * d.x;
+}
+
+bool overlaps(const BvhNode& n, const Vec3& lo, const Vec3& hi) {
+  return !(n.hi.x < lo.x || n.hi.y < lo.y || n.hi.z < lo.z || n.lo.x > hi.x || n.lo.y > hi.y ||
+           n.lo.z > hi.z);
+}
+
+bool differ(const Vec3& a, const Vec3& b) { return a.x != b.x || a.y != b.y || a.z != b.z; }
+
+// The corners' barycentric weights of the point of face (a, b, c) closest to p.
+struct Foot {
+  Vec3 n;          // unit normal (0 for a degenerate face)
+  Real d = 0;      // signed distance of p from the face's plane
+  Real w[3] = {};  // weights of a, b, c
+  Real lateral2 = 0;
+};
+
+Foot foot(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  Foot r;
+  r.n = collide::unit_normal(a, b, c);
+  r.d = dot(p - a, r.n);
+  const collide::ClosestOnTriangle q = collide::closest_on_triangle(p, a, b, c);
+  r.w[0] = Real(1) - q.u - q.v, r.w[1] = q.u, r.w[2] = q.v;
+  r.lateral2 = std::max(Real(0), norm2(p - q.point) - r.d * r.d);
+  return r;
+}
+
+Real unit_clamp(Real v) { return v < Real(0) ? Real(0) : v > Real(1) ? Real(1) : v; }
+
+// Parameters s, t in [0, 1] of the closest points of segments p0 p1 and q0 q1 (Ericson,
+// "Real-Time Collision Detection", 5.1.9).
+void closest_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Real& s,
+                      Real& t) {
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const Real a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+  s = t = Real(0);
+  if (!(a > Real(0)) || !(e > Real(0))) return;
+  const Real c = dot(d1, r), b = dot(d1, d2), den = a * e - b * b;
+  s = den > Real(0) ? unit_clamp((b * f - c * e) / den) : Real(0);
+  t = (b * s + f) / e;
+  if (t < Real(0)) {
+    t = Real(0);
+    s = unit_clamp(-c / a);
+  } else if (t > Real(1)) {
+    t = Real(1);
+    s = unit_clamp((b - c) / a);
+  }
+}
+
+}  // namespace
+
+double SurfaceContact::default_gap(const BodiesModel& m) {
+  std::vector<Real> len;
+  len.reserve(m.surface.size() * 3);
+  for (const Tri& t : m.surface)
+    for (int k = 0; k < 3; ++k) len.push_back(norm(m.x0[t.v[k]] - m.x0[t.v[(k + 1) % 3]]));
+  if (len.empty()) return 0.0;
+  std::nth_element(len.begin(), len.begin() + len.size() / 2, len.end());
+  return 0.1 * double(len[len.size() / 2]);
+}
+
+SurfaceContact::SurfaceContact(const BodiesModel& m, const ContactSettings& s) {
+  if (!(s.gap >= 0) || !(s.friction >= 0))
+    throw std::invalid_argument("contact: gap and friction must be >= 0");
+  gap_ = s.gap > 0 ? s.gap : default_gap(m);
+  friction_ = s.friction;
+  rounds_ = std::max(1, s.rounds);
+  sweeps_ = std::max(1, s.sweeps);
+  x0_ = m.x0;
+  tris_ = m.surface;
+  const int nb = int(m.bodies.size());
+  node_body_.assign(std::size_t(m.nodes), 0);
+  tri_body_.assign(tris_.size(), 0);
+  for (int b = 0; b < nb; ++b) {
+    for (int i = m.node_offset[b]; i < m.node_offset[b + 1]; ++i) node_body_[i] = b;
+    for (int t = m.tri_offset[b]; t < m.tri_offset[b + 1]; ++t) tri_body_[t] = b;
+  }
+  std::vector<std::uint8_t> on(std::size_t(m.nodes), 0);
+  for (const Tri& t : tris_)
+    for (int k = 0; k < 3; ++k) on[t.v[k]] = 1;
+  for (int i = 0; i < m.nodes; ++i)
+    if (on[i]) verts_.push_back(i);
+  // Unique edges, and each face's three.
+  std::vector<std::array<int, 3>> keyed;  // (low node, high node, face * 3 + corner)
+  for (std::size_t f = 0; f < tris_.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = tris_[f].v[k], b = tris_[f].v[(k + 1) % 3];
+      keyed.push_back({std::min(a, b), std::max(a, b), int(f) * 3 + k});
+    }
+  std::sort(keyed.begin(), keyed.end());
+  tri_edges_.resize(tris_.size());
+  for (std::size_t i = 0; i < keyed.size(); ++i) {
+    if (i == 0 || keyed[i][0] != keyed[i - 1][0] || keyed[i][1] != keyed[i - 1][1])
+      edges_.push_back({keyed[i][0], keyed[i][1]});
+    tri_edges_[keyed[i][2] / 3][keyed[i][2] % 3] = int(edges_.size()) - 1;
+  }
+  inv_mass_.resize(std::size_t(m.nodes));
+  for (int i = 0; i < m.nodes; ++i)
+    inv_mass_[i] = m.pinned[i] || !(m.mass[i] > Real(0)) ? Real(0) : Real(1) / m.mass[i];
+  box_ = m.settings.box;
+  box_lo_ = Vec3(m.settings.box_lo);
+  box_hi_ = Vec3(m.settings.box_hi);
+  if (!tris_.empty()) {
+    collide::HostTree t = collide::build_sah_tree(x0_.data(), tris_.data(), int(tris_.size()));
+    tree_ = std::move(t.nodes);
+    prims_ = std::move(t.prims);
+    refit(x0_, x0_);
+    area0_ = 0;
+    for (const BvhNode& n : tree_) area0_ += box_area(n.lo, n.hi);
+  }
+}
+
+// Leaf boxes hold each face at both ends of the step, grown by the gap; parents their
+// children. A top-down build puts children after their parent, so a backward pass suffices.
+void SurfaceContact::refit(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x) {
+  const Vec3 g{Real(gap_), Real(gap_), Real(gap_)};
+  for (int i = int(tree_.size()) - 1; i >= 0; --i) {
+    BvhNode& n = tree_[i];
+    if (collide::is_leaf(n)) {
+      Vec3 lo = x[tris_[prims_[n.a]].v[0]], hi = lo;
+      for (int k = n.a; k < n.a - n.b; ++k)
+        for (int c = 0; c < 3; ++c) {
+          const int v = tris_[prims_[k]].v[c];
+          lo = vmin(lo, vmin(x_old[v], x[v]));
+          hi = vmax(hi, vmax(x_old[v], x[v]));
+        }
+      n.lo = lo - g, n.hi = hi + g;
+    } else {
+      n.lo = vmin(tree_[n.a].lo, tree_[n.b].lo);
+      n.hi = vmax(tree_[n.a].hi, tree_[n.b].hi);
+    }
+  }
+}
+
+// Vertex p is in contact with face f when it lies within the gap in front of the face, or
+// behind it no deeper than the two moved this step, unless it started the step behind the
+// face and over it (then it is inside for another reason and must not be pulled through; a
+// vertex beside the face, behind its plane, may slide under it within a step on a wavy
+// surface). Faces that
+// touch p, or lay within three gaps of it at rest on the same body, are its neighbours.
+bool SurfaceContact::vertex_face(int p, int f, const std::vector<Vec3>& x_old,
+                                 const std::vector<Vec3>& x) const {
+  const Tri& t = tris_[f];
+  if (t.v[0] == p || t.v[1] == p || t.v[2] == p) return false;
+  const Real g = Real(gap_);
+  const Foot e = foot(x[p], x[t.v[0]], x[t.v[1]], x[t.v[2]]);
+  if (!(e.d < g) || e.lateral2 > g * g || norm2(e.n) == Real(0)) return false;
+  const Foot s = foot(x_old[p], x_old[t.v[0]], x_old[t.v[1]], x_old[t.v[2]]);
+  if (s.d < -g && s.lateral2 <= g * g) return false;
+  if (e.d < Real(0)) {
+    Real reach = norm(x[p] - x_old[p]) + g;
+    Real face = 0;
+    for (int k = 0; k < 3; ++k) face = std::max(face, norm(x[t.v[k]] - x_old[t.v[k]]));
+    if (-e.d > reach + face) return false;
+  }
+  if (node_body_[p] == tri_body_[f]) {
+    const Vec3 q =
+        collide::closest_on_triangle(x0_[p], x0_[t.v[0]], x0_[t.v[1]], x0_[t.v[2]]).point;
+    if (norm2(x0_[p] - q) < Real(9) * g * g) return false;
+  }
+  return true;
+}
+
+// Edges e and g (sharing no node, not within three gaps of each other at rest on one body)
+// are in contact when their closest points, inside both, lie within the gap along the
+// direction that separated them at the step's start, or behind it no deeper than the four
+// nodes moved. Ends of edges are the vertex-face test's.
+bool SurfaceContact::edge_edge(int e, int g, const std::vector<Vec3>& x_old,
+                               const std::vector<Vec3>& x, Vec3& n) const {
+  const std::array<int, 2>&E = edges_[e], &G = edges_[g];
+  if (E[0] == G[0] || E[0] == G[1] || E[1] == G[0] || E[1] == G[1]) return false;
+  const Real gap = Real(gap_);
+  Real s, t;
+  closest_segments(x[E[0]], x[E[1]], x[G[0]], x[G[1]], s, t);
+  if (!(s > Real(0) && s < Real(1) && t > Real(0) && t < Real(1))) return false;
+  const Vec3 w = x[E[0]] + (x[E[1]] - x[E[0]]) * s - x[G[0]] - (x[G[1]] - x[G[0]]) * t;
+  Real s0, t0;
+  closest_segments(x_old[E[0]], x_old[E[1]], x_old[G[0]], x_old[G[1]], s0, t0);
+  const Vec3 w0 = x_old[E[0]] + (x_old[E[1]] - x_old[E[0]]) * s0 - x_old[G[0]] -
+                  (x_old[G[1]] - x_old[G[0]]) * t0;
+  const Real len0 = norm(w0);
+  if (!(len0 > Real(1e-3) * gap)) return false;  // touching at the start: no side to keep
+  n = w0 / len0;
+  const Real d = dot(w, n);
+  if (!(d < gap) || norm2(w) - d * d > gap * gap) return false;
+  if (d < Real(0)) {
+    Real moved = 0;
+    for (int k : {E[0], E[1], G[0], G[1]}) moved += norm(x[k] - x_old[k]);
+    if (-d > moved + gap) return false;
+  }
+  if (node_body_[E[0]] == node_body_[G[0]]) {
+    Real rs, rt;
+    closest_segments(x0_[E[0]], x0_[E[1]], x0_[G[0]], x0_[G[1]], rs, rt);
+    const Vec3 r =
+        x0_[E[0]] + (x0_[E[1]] - x0_[E[0]]) * rs - x0_[G[0]] - (x0_[G[1]] - x0_[G[0]]) * rt;
+    if (norm2(r) < Real(9) * gap * gap) return false;
+  }
+  return true;
+}
+
+// The pair at positions x: its nodes, their weights (+ on the side the normal points to), the
+// normal and the signed distance. False for a face without area.
+bool SurfaceContact::contact(const Pair& c, const std::vector<Vec3>& x, Contact& out) const {
+  if (c.f >= 0) {
+    const Tri& t = tris_[c.f];
+    const Foot e = foot(x[c.p], x[t.v[0]], x[t.v[1]], x[t.v[2]]);
+    if (norm2(e.n) == Real(0)) return false;
+    out = Contact{{c.p, t.v[0], t.v[1], t.v[2]}, {Real(1), -e.w[0], -e.w[1], -e.w[2]}, e.n, e.d};
+    return true;
+  }
+  const std::array<int, 2>&E = edges_[c.p], &G = edges_[-c.f - 1];
+  Real s, t;
+  closest_segments(x[E[0]], x[E[1]], x[G[0]], x[G[1]], s, t);
+  const Vec3 w = x[E[0]] + (x[E[1]] - x[E[0]]) * s - x[G[0]] - (x[G[1]] - x[G[0]]) * t;
+  out = Contact{{E[0], E[1], G[0], G[1]}, {Real(1) - s, s, t - Real(1), -t}, c.n, dot(w, c.n)};
+  return true;
+}
+
+void SurfaceContact::detect(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
+                            std::vector<Pair>& out) {
+  out.clear();
+  if (tree_.empty()) return;
+  const int nv = int(verts_.size());
+  const int nt = omp_get_max_threads();
+  std::vector<std::vector<Pair>> part(static_cast<std::size_t>(nt));
+#pragma omp parallel num_threads(nt)
+  {
+    std::vector<Pair>& mine = part[std::size_t(omp_get_thread_num())];
+    int stack[128];
+#pragma omp for schedule(static)
+    for (int j = 0; j < nv; ++j) {
+      const int p = verts_[j];
+      const Vec3 lo = vmin(x_old[p], x[p]), hi = vmax(x_old[p], x[p]);
+      int sp = 0;
+      stack[sp++] = 0;
+      while (sp > 0) {
+        const BvhNode& n = tree_[stack[--sp]];
+        if (!overlaps(n, lo, hi)) continue;
+        if (collide::is_leaf(n)) {
+          for (int k = n.a; k < n.a - n.b; ++k)
+            if (vertex_face(p, prims_[k], x_old, x)) mine.push_back({p, prims_[k], Vec3()});
+        } else if (sp + 2 <= 128) {
+          stack[sp++] = n.b;
+          stack[sp++] = n.a;
+        }
+      }
+    }
+  }
+  const int ne = int(edges_.size());
+#pragma omp parallel num_threads(nt)
+  {
+    std::vector<Pair>& mine = part[std::size_t(omp_get_thread_num())];
+    std::vector<int> near;
+    int stack[128];
+#pragma omp for schedule(static)
+    for (int e = 0; e < ne; ++e) {
+      const int a = edges_[e][0], b = edges_[e][1];
+      const Vec3 lo = vmin(vmin(x_old[a], x[a]), vmin(x_old[b], x[b]));
+      const Vec3 hi = vmax(vmax(x_old[a], x[a]), vmax(x_old[b], x[b]));
+      near.clear();
+      int sp = 0;
+      stack[sp++] = 0;
+      while (sp > 0) {
+        const BvhNode& n = tree_[stack[--sp]];
+        if (!overlaps(n, lo, hi)) continue;
+        if (collide::is_leaf(n)) {
+          for (int k = n.a; k < n.a - n.b; ++k)
+            for (int g : tri_edges_[prims_[k]])
+              if (g > e) near.push_back(g);
+        } else if (sp + 2 <= 128) {
+          stack[sp++] = n.b;
+          stack[sp++] = n.a;
+        }
+      }
+      std::sort(near.begin(), near.end());
+      near.erase(std::unique(near.begin(), near.end()), near.end());
+      Vec3 nrm;
+      for (int g : near)
+        if (edge_edge(e, g, x_old, x, nrm)) mine.push_back({e, -g - 1, nrm});
+    }
+  }
+  for (const std::vector<Pair>& m : part) out.insert(out.end(), m.begin(), m.end());
+  // Faces in index order, not the tree's: the sweeps' order then survives a rebuild (and a
+  // checkpoint, which starts from the rest tree).
+  std::sort(out.begin(), out.end(),
+            [](const Pair& a, const Pair& b) { return a.p != b.p ? a.p < b.p : a.f < b.f; });
+}
+
+ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector<Vec3>& x,
+                                     std::vector<Vec3>& v, double dt,
+                                     std::vector<std::uint8_t>& moved) {
+  ContactStats st;
+  moved.assign(x.size(), 0);
+  if (tree_.empty() || !(dt > 0)) return st;
+  const Real g = Real(gap_), mu = Real(friction_);
+  const std::vector<Vec3> x_in = x, v_in = v;
+  auto clamp = [&](int i) {  // the tank's walls win: a push never leaves a node outside
+    if (!box_) return;
+    for (int c = 0; c < 3; ++c) {
+      if (x[i][c] < box_lo_[c]) x[i][c] = box_lo_[c], v[i][c] = std::max(v[i][c], Real(0));
+      if (x[i][c] > box_hi_[c]) x[i][c] = box_hi_[c], v[i][c] = std::min(v[i][c], Real(0));
+    }
+  };
+  // Positions: each pair pushed to the gap along its normal, the push shared by inverse mass
+  // and weight (momentum-free: the weights sum to zero).
+  std::vector<Pair> pairs, touched;
+  Contact k;
+  auto weight = [&](const Contact& c) {
+    Real W = 0;
+    for (int i = 0; i < 4; ++i) W += c.w[i] * c.w[i] * inv_mass_[c.node[i]];
+    return W;
+  };
+  double area = 0;
+  for (; st.rounds < rounds_; ++st.rounds) {
+    refit(x_old, x);
+    if (st.rounds == 0) {
+      area = 0;
+      for (const BvhNode& n : tree_) area += box_area(n.lo, n.hi);
+    }
+    detect(x_old, x, pairs);
+    bool violated = false;
+    for (const Pair& c : pairs)
+      if (contact(c, x, k) && k.d < g * Real(0.999)) violated = true;
+    if (!violated) break;
+    touched.insert(touched.end(), pairs.begin(), pairs.end());
+    for (int s = 0; s < sweeps_; ++s)
+      for (const Pair& c : pairs) {
+        if (!contact(c, x, k) || !(k.d < g)) continue;
+        const Real W = weight(k);
+        if (!(W > Real(0))) continue;
+        const Vec3 push = k.n * ((g - k.d) / W);
+        for (int i = 0; i < 4; ++i) {
+          x[k.node[i]] += push * (k.w[i] * inv_mass_[k.node[i]]);
+          clamp(k.node[i]);
+        }
+      }
+  }
+  // A deformed tree answers slowly: rebuild it over the current surface now and then.
+  if (area > 2.0 * area0_) {
+    collide::HostTree t = collide::build_sah_tree(x.data(), tris_.data(), int(tris_.size()));
+    tree_ = std::move(t.nodes);
+    prims_ = std::move(t.prims);
+    refit(x, x);
+    area0_ = 0;
+    for (const BvhNode& n : tree_) area0_ += box_area(n.lo, n.hi);
+  }
+
+  // Velocities: the pairs that touched stop approaching (inelastic), and their tangential
+  // motion loses mu times the normal impulse (Coulomb, sticking when that suffices).
+  std::stable_sort(touched.begin(), touched.end(),
+                   [](const Pair& a, const Pair& b) { return a.p != b.p ? a.p < b.p : a.f < b.f; });
+  touched.erase(std::unique(touched.begin(), touched.end(),
+                            [](const Pair& a, const Pair& b) { return a.p == b.p && a.f == b.f; }),
+                touched.end());
+  for (int s = 0; s < sweeps_; ++s)
+    for (const Pair& c : touched) {
+      if (!contact(c, x, k) || !(k.d < Real(2) * g)) continue;
+      const Real W = weight(k);
+      Vec3 rel;
+      for (int i = 0; i < 4; ++i) rel += v[k.node[i]] * k.w[i];
+      const Real un = dot(rel, k.n);
+      if (!(un < Real(0)) || !(W > Real(0))) continue;
+      const Real jn = -un / W;
+      const Vec3 ut = rel - k.n * un;
+      const Real slide = norm(ut);
+      const Real jt = std::min(slide / W, mu * jn);
+      Vec3 j = k.n * jn;
+      if (slide > Real(0)) j -= ut * (jt / slide);
+      for (int i = 0; i < 4; ++i) {
+        v[k.node[i]] += j * (k.w[i] * inv_mass_[k.node[i]]);
+        clamp(k.node[i]);
+      }
+    }
+
+  st.pairs = int(touched.size());
+  for (const Pair& c : touched)
+    if (contact(c, x, k)) st.min_gap = std::min(st.min_gap, double(k.d));
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (differ(x[i], x_in[i]) || differ(v[i], v_in[i])) moved[i] = 1, ++st.nodes;
+  return st;
+}
+
+long intersecting_pairs(const BodiesModel& m, const std::vector<Vec3>& x) {
+  SurfaceMesh s;
+  s.x.reserve(x.size());
+  for (const Vec3& p : x) s.x.push_back(Vec3d(p));
+  s.tris = m.surface;
+  return count_self_intersections(s);
+}
+
+int inverted_elements(const BodiesModel& m, const std::vector<Vec3>& x) {
+  int n = 0;
+  for (const Tet& t : m.tets) {
+    auto vol = [&](const std::vector<Vec3>& p) {
+      return dot(p[t.v[1]] - p[t.v[0]], cross(p[t.v[2]] - p[t.v[0]], p[t.v[3]] - p[t.v[0]]));
+    };
+    const Real rest = vol(m.x0), now = vol(x);
+    if (!(now * rest > Real(0))) ++n;
+  }
+  return n;
+}
+
+}  // namespace sphfem
