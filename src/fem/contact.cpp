@@ -30,6 +30,25 @@ bool overlaps(const BvhNode& n, const Vec3& lo, const Vec3& hi) {
            n.lo.z > hi.z);
 }
 
+// Calls visit(face) for each face in a leaf whose box overlaps [lo, hi].
+template <class Visit>
+void faces_overlapping(const std::vector<BvhNode>& tree, const std::vector<int>& prims,
+                       const Vec3& lo, const Vec3& hi, Visit&& visit) {
+  int stack[128];
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const BvhNode& n = tree[stack[--sp]];
+    if (!overlaps(n, lo, hi)) continue;
+    if (collide::is_leaf(n)) {
+      for (int k = n.a; k < n.a - n.b; ++k) visit(prims[k]);
+    } else if (sp + 2 <= 128) {
+      stack[sp++] = n.b;
+      stack[sp++] = n.a;
+    }
+  }
+}
+
 bool differ(const Vec3& a, const Vec3& b) { return a.x != b.x || a.y != b.y || a.z != b.z; }
 
 // The corners' barycentric weights of the point of face (a, b, c) closest to p.
@@ -251,24 +270,13 @@ void SurfaceContact::detect(const std::vector<Vec3>& x_old, const std::vector<Ve
 #pragma omp parallel num_threads(nt)
   {
     std::vector<Pair>& mine = part[std::size_t(omp_get_thread_num())];
-    int stack[128];
 #pragma omp for schedule(static)
     for (int j = 0; j < nv; ++j) {
       const int p = verts_[j];
       const Vec3 lo = vmin(x_old[p], x[p]), hi = vmax(x_old[p], x[p]);
-      int sp = 0;
-      stack[sp++] = 0;
-      while (sp > 0) {
-        const BvhNode& n = tree_[stack[--sp]];
-        if (!overlaps(n, lo, hi)) continue;
-        if (collide::is_leaf(n)) {
-          for (int k = n.a; k < n.a - n.b; ++k)
-            if (vertex_face(p, prims_[k], x_old, x)) mine.push_back({p, prims_[k], Vec3()});
-        } else if (sp + 2 <= 128) {
-          stack[sp++] = n.b;
-          stack[sp++] = n.a;
-        }
-      }
+      faces_overlapping(tree_, prims_, lo, hi, [&](int f) {
+        if (vertex_face(p, f, x_old, x)) mine.push_back({p, f, Vec3()});
+      });
     }
   }
   const int ne = int(edges_.size());
@@ -276,27 +284,16 @@ void SurfaceContact::detect(const std::vector<Vec3>& x_old, const std::vector<Ve
   {
     std::vector<Pair>& mine = part[std::size_t(omp_get_thread_num())];
     std::vector<int> near;
-    int stack[128];
 #pragma omp for schedule(static)
     for (int e = 0; e < ne; ++e) {
       const int a = edges_[e][0], b = edges_[e][1];
       const Vec3 lo = vmin(vmin(x_old[a], x[a]), vmin(x_old[b], x[b]));
       const Vec3 hi = vmax(vmax(x_old[a], x[a]), vmax(x_old[b], x[b]));
       near.clear();
-      int sp = 0;
-      stack[sp++] = 0;
-      while (sp > 0) {
-        const BvhNode& n = tree_[stack[--sp]];
-        if (!overlaps(n, lo, hi)) continue;
-        if (collide::is_leaf(n)) {
-          for (int k = n.a; k < n.a - n.b; ++k)
-            for (int g : tri_edges_[prims_[k]])
-              if (g > e) near.push_back(g);
-        } else if (sp + 2 <= 128) {
-          stack[sp++] = n.b;
-          stack[sp++] = n.a;
-        }
-      }
+      faces_overlapping(tree_, prims_, lo, hi, [&](int f) {
+        for (int g : tri_edges_[f])
+          if (g > e) near.push_back(g);
+      });
       std::sort(near.begin(), near.end());
       near.erase(std::unique(near.begin(), near.end()), near.end());
       Vec3 nrm;
