@@ -157,8 +157,9 @@ std::string scene_format_markdown() {
      << "- at most " << scene::kMaxBodyTets
      << " tetrahedra per body: a shape's `resolution`, and a mesh file's `max_volume` (the "
         "surface's volume / `max_volume` is fewer tetrahedra than TetGen makes);\n"
-     << "- and the memory all of it needs (about 104 B per particle, 56 B per wall sample, 8 B "
-        "per grid cell, 181 B per body node and 196 B per tetrahedron) at most the memory free "
+     << "- and the memory all of it needs (about 324 B per particle, 220 B of it the neighbour "
+        "list, 56 B per wall sample, 8 B per grid cell, 194 B per body node and 196 B per "
+        "tetrahedron) at most the memory free "
         "on the machine (`MemAvailable`, or a container's `memory.max` when lower).\n\n";
 
   const SceneSpec sample = scene::example_scene();

@@ -87,16 +87,18 @@ double frame_count(double duration, double fps) { return std::floor(duration * f
 
 double fluid_bytes(double capacity, double wall_samples, double grid_cells) {
   // Per particle: x, v, a, tmp (4 x 12 B); rho, p, alpha, kappa, kappa_sum, two warm starts,
-  // tmp (8 x 4 B); nb, full, id, tmp, keys, perm (6 x 4 B). Per wall sample: x (12 B), nine
-  // reals and two ints (44 B). Per cell 8 B.
-  return capacity * (4 * 12.0 + 14 * 4.0) + wall_samples * 56.0 + grid_cells * 8.0;
+  // tmp (8 x 4 B); nb, full, id, tmp, keys, perm (6 x 4 B); the neighbour list, room for twice
+  // the 27 lattice neighbours within the support, and its count (55 x 4 B). Per wall sample:
+  // x (12 B), nine reals and two ints (44 B). Per cell 8 B.
+  return capacity * (4 * 12.0 + 14 * 4.0 + 55 * 4.0) + wall_samples * 56.0 + grid_cells * 8.0;
 }
 
 double body_bytes(double nodes, double tets, double surface_triangles) {
   // Per node: x, v and ten solver vectors (12 x 12 B), mass, damping, preconditioner, flags,
-  // gather start (37 B); per tet: nodes, gradients, moduli, rotated gradients, element forces,
-  // rotations, gather entries (196 B); per surface triangle 12 B.
-  return nodes * 181.0 + tets * 196.0 + surface_triangles * 12.0;
+  // gather start (37 B), the walls' mask and force (13 B); per tet: nodes, gradients, moduli,
+  // rotated gradients, element forces, rotations, gather entries (196 B); per surface
+  // triangle 12 B.
+  return nodes * 194.0 + tets * 196.0 + surface_triangles * 12.0;
 }
 
 SceneSize scene_size(const SceneSpec& s) {
