@@ -238,7 +238,7 @@ TEST(SimBodyContact, ResponseKeepsMomentumAndNeverAddsKineticEnergy) {
     if (st.pairs > 0) ++cases_with_contact;
     EXPECT_LT(norm(p1 - p0), 1e-6 * scale) << "case " << c;
     EXPECT_LE(k1, k0 * (1 + 1e-6)) << "case " << c;
-    if (st.pairs > 0) EXPECT_GE(st.min_gap, 0.99 * contact.gap()) << "case " << c;
+    if (st.pairs > 0) { EXPECT_GE(st.min_gap, 0.99 * contact.gap()) << "case " << c; }
   }
   std::printf("[ measured ] %d of 40 random encounters touched\n", cases_with_contact);
   EXPECT_GT(cases_with_contact, 30);

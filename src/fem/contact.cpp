@@ -144,14 +144,22 @@ SurfaceContact::SurfaceContact(const BodiesModel& m, const ContactSettings& s) {
   box_ = m.settings.box;
   box_lo_ = Vec3(m.settings.box_lo);
   box_hi_ = Vec3(m.settings.box_hi);
-  if (!tris_.empty()) {
-    collide::HostTree t = collide::build_sah_tree(x0_.data(), tris_.data(), int(tris_.size()));
-    tree_ = std::move(t.nodes);
-    prims_ = std::move(t.prims);
-    refit(x0_, x0_);
-    area0_ = 0;
-    for (const BvhNode& n : tree_) area0_ += box_area(n.lo, n.hi);
-  }
+  if (!tris_.empty()) build_tree(x0_);
+}
+
+// A binned-SAH tree over the faces at x, its boxes, and the box area later refits compare with.
+void SurfaceContact::build_tree(const std::vector<Vec3>& x) {
+  collide::HostTree t = collide::build_sah_tree(x.data(), tris_.data(), int(tris_.size()));
+  tree_ = std::move(t.nodes);
+  prims_ = std::move(t.prims);
+  refit(x, x);
+  area0_ = tree_area();
+}
+
+double SurfaceContact::tree_area() const {
+  double a = 0;
+  for (const BvhNode& n : tree_) a += box_area(n.lo, n.hi);
+  return a;
 }
 
 // Leaf boxes hold each face at both ends of the step, grown by the gap; parents their
@@ -335,10 +343,7 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
   double area = 0;
   for (; st.rounds < rounds_; ++st.rounds) {
     refit(x_old, x);
-    if (st.rounds == 0) {
-      area = 0;
-      for (const BvhNode& n : tree_) area += box_area(n.lo, n.hi);
-    }
+    if (st.rounds == 0) area = tree_area();
     detect(x_old, x, pairs);
     bool violated = false;
     for (const Pair& c : pairs)
@@ -358,14 +363,7 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
       }
   }
   // A deformed tree answers slowly: rebuild it over the current surface now and then.
-  if (area > 2.0 * area0_) {
-    collide::HostTree t = collide::build_sah_tree(x.data(), tris_.data(), int(tris_.size()));
-    tree_ = std::move(t.nodes);
-    prims_ = std::move(t.prims);
-    refit(x, x);
-    area0_ = 0;
-    for (const BvhNode& n : tree_) area0_ += box_area(n.lo, n.hi);
-  }
+  if (area > 2.0 * area0_) build_tree(x);
 
   // Velocities: the pairs that touched stop approaching (inelastic), and their tangential
   // motion loses mu times the normal impulse (Coulomb, sticking when that suffices).

@@ -66,6 +66,8 @@ class SurfaceContact {
     Vec3 n;
     Real d;
   };
+  void build_tree(const std::vector<Vec3>& x);
+  double tree_area() const;
   void refit(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x);
   void detect(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x, std::vector<Pair>& out);
   bool vertex_face(int p, int f, const std::vector<Vec3>& x_old, const std::vector<Vec3>& x) const;
