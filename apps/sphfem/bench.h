@@ -13,7 +13,8 @@ struct BenchOptions {
   std::string backend = "cpu";
   std::string out_dir;
   bool fem = false;
-  std::string mesh;  // --fem: surface to tetrahedralise; empty = the fetched bunny
+  std::string mesh;      // --fem: surface to tetrahedralise; empty = the fetched bunny
+  bool resting = false;  // --fem: only the bunny resting on the floor (fem_contact.csv)
   bool paper = false;
   std::string method = "all";  // --paper: raytraced, raytraced_paper, boundary_particles, both, all
   std::string scenes;          // --paper: folder of the paper's scenes (default scenes/paper)

@@ -195,10 +195,11 @@ int run_fem_bench(const BenchOptions& opt) {
 
   std::vector<Case> cases;
   for (int cells : kSphereCells)
-    cases.push_back({"sphere", make_sphere(Vec3d(0, 0, 0), 0.5 * kBodySize, cells),
-                     "make_sphere, " + std::to_string(cells) + " cells across"});
+    if (!opt.resting)
+      cases.push_back({"sphere", make_sphere(Vec3d(0, 0, 0), 0.5 * kBodySize, cells),
+                       "make_sphere, " + std::to_string(cells) + " cells across"});
   const SurfaceMesh bunny = bunny_surface(opt);
-  if (!bunny.tris.empty()) {
+  if (!bunny.tris.empty() && !opt.resting) {
     const std::string name = std::filesystem::path(opt.mesh.empty() ? "bunny" : opt.mesh).stem();
     for (long target : kBunnyTargets) {
       std::string switches;
@@ -236,7 +237,7 @@ int run_fem_bench(const BenchOptions& opt) {
                   r.prof.ms_solve * per, r.prof.ms_integrate * per, r.ms, r.cg, p.tets, p.ms);
     csv += line;
   }
-  if (!opt.out_dir.empty()) {
+  if (!opt.out_dir.empty() && !cases.empty()) {
     io::ensure_directory(opt.out_dir);
     const std::string path = opt.out_dir + "/fem.csv";
     const bool fresh = !std::filesystem::exists(path);
@@ -274,6 +275,7 @@ int run_fem_bench(const BenchOptions& opt) {
       rows += line;
     }
     if (!opt.out_dir.empty()) {
+      io::ensure_directory(opt.out_dir);
       const std::string path = opt.out_dir + "/fem_contact.csv";
       const bool fresh = !std::filesystem::exists(path);
       std::ofstream f(path, std::ios::app);

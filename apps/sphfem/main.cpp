@@ -179,6 +179,9 @@ int main(int argc, char** argv) {
   bench->add_option("--mesh", bench_opt.mesh,
                     "--fem: closed surface to tetrahedralise (default build/assets/bunny.obj, "
                     "written by scripts/fetch-bunny.sh build/assets)");
+  bench->add_flag("--resting", bench_opt.resting,
+                  "--fem: only the bunny resting on the tank floor, surface contact off and on "
+                  "(fem_contact.csv)");
 
   RenderOptions render_opt;
   auto* render = add_render_command(app, render_opt);

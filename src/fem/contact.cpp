@@ -1,6 +1,7 @@
-// Vertex-face contact between body surfaces (sphfem/fem/contact.h): candidates from a host
-// BVH over the faces' swept boxes, positions projected apart by Gauss-Seidel sweeps, then
-// inelastic impulses with Coulomb friction on the pairs that touched.
+// Vertex-face and edge-edge contact between body surfaces (sphfem/fem/contact.h): candidates
+// from a host BVH over the faces' swept boxes (through a near list kept between steps while
+// the surfaces move slowly), positions projected apart by Gauss-Seidel sweeps, then inelastic
+// impulses with Coulomb friction on the pairs that touched.
 #include "sphfem/fem/contact.h"
 
 #include <omp.h>
@@ -30,18 +31,19 @@ bool overlaps(const BvhNode& n, const Vec3& lo, const Vec3& hi) {
            n.lo.z > hi.z);
 }
 
-// Calls visit(face) for each face in a leaf whose box overlaps [lo, hi].
+// Calls visit(node) for each leaf whose box overlaps [lo, hi].
 template <class Visit>
-void faces_overlapping(const std::vector<BvhNode>& tree, const std::vector<int>& prims,
-                       const Vec3& lo, const Vec3& hi, Visit&& visit) {
+void leaves_overlapping(const std::vector<BvhNode>& tree, const Vec3& lo, const Vec3& hi,
+                        Visit&& visit) {
   int stack[128];
   int sp = 0;
   stack[sp++] = 0;
   while (sp > 0) {
-    const BvhNode& n = tree[stack[--sp]];
+    const int i = stack[--sp];
+    const BvhNode& n = tree[i];
     if (!overlaps(n, lo, hi)) continue;
     if (collide::is_leaf(n)) {
-      for (int k = n.a; k < n.a - n.b; ++k) visit(prims[k]);
+      visit(i);
     } else if (sp + 2 <= 128) {
       stack[sp++] = n.b;
       stack[sp++] = n.a;
@@ -138,6 +140,21 @@ SurfaceContact::SurfaceContact(const BodiesModel& m, const ContactSettings& s) {
       edges_.push_back({keyed[i][0], keyed[i][1]});
     tri_edges_[keyed[i][2] / 3][keyed[i][2] % 3] = int(edges_.size()) - 1;
   }
+  std::vector<int> face_of(std::size_t(m.nodes), -1);
+  for (std::size_t f = tris_.size(); f-- > 0;)
+    for (int k = 0; k < 3; ++k) face_of[tris_[f].v[k]] = int(f);
+  for (int p : verts_) vert_face_.push_back(face_of[p]);
+  edge_face_.assign(edges_.size(), -1);
+  for (std::size_t f = tris_.size(); f-- > 0;)
+    for (int e : tri_edges_[f]) edge_face_[e] = int(f);
+  edge_face_start_.assign(edges_.size() + 1, 0);
+  for (const std::array<int, 3>& te : tri_edges_)
+    for (int e : te) ++edge_face_start_[e + 1];
+  for (std::size_t e = 0; e < edges_.size(); ++e) edge_face_start_[e + 1] += edge_face_start_[e];
+  edge_faces_.resize(std::size_t(edge_face_start_.back()));
+  std::vector<int> fill(edge_face_start_.begin(), edge_face_start_.end() - 1);
+  for (std::size_t f = 0; f < tris_.size(); ++f)
+    for (int e : tri_edges_[f]) edge_faces_[fill[e]++] = int(f);
   inv_mass_.resize(std::size_t(m.nodes));
   for (int i = 0; i < m.nodes; ++i)
     inv_mass_[i] = m.pinned[i] || !(m.mass[i] > Real(0)) ? Real(0) : Real(1) / m.mass[i];
@@ -152,6 +169,25 @@ void SurfaceContact::build_tree(const std::vector<Vec3>& x) {
   collide::HostTree t = collide::build_sah_tree(x.data(), tris_.data(), int(tris_.size()));
   tree_ = std::move(t.nodes);
   prims_ = std::move(t.prims);
+  leaves_ = std::move(t.leaves);
+  // Each query to the leaf that holds its face, in query order within a leaf.
+  std::vector<int> leaf_of(tris_.size());
+  face_leaf_.resize(tris_.size());
+  leaf_ord_.assign(tree_.size(), -1);
+  for (std::size_t l = 0; l < leaves_.size(); ++l) {
+    leaf_ord_[leaves_[l]] = int(l);
+    const BvhNode& n = tree_[leaves_[l]];
+    for (int k = n.a; k < n.a - n.b; ++k)
+      leaf_of[prims_[k]] = int(l), face_leaf_[prims_[k]] = leaves_[l];
+  }
+  const int nv = int(verts_.size()), nq = nv + int(edges_.size());
+  auto face = [&](int q) { return q < nv ? vert_face_[q] : edge_face_[q - nv]; };
+  home_start_.assign(leaves_.size() + 1, 0);
+  for (int q = 0; q < nq; ++q) ++home_start_[leaf_of[face(q)] + 1];
+  for (std::size_t l = 0; l < leaves_.size(); ++l) home_start_[l + 1] += home_start_[l];
+  home_.resize(std::size_t(nq));
+  std::vector<int> fill(home_start_.begin(), home_start_.end() - 1);
+  for (int q = 0; q < nq; ++q) home_[fill[leaf_of[face(q)]]++] = q;
   refit(x, x);
   area0_ = tree_area();
 }
@@ -268,52 +304,260 @@ bool SurfaceContact::contact(const Pair& c, const std::vector<Vec3>& x, Contact&
   return true;
 }
 
+// Calls vertex(p, f, out) for each face f of the leaves whose boxes overlap vertex p's swept
+// box grown by `grow`, and edge(e, g, out) for each edge g > e (once, ascending) of the faces
+// of the leaves overlapping edge e's; out is the calling thread's part of found_. A query's
+// box lies inside its home leaf's box, so only the leaves overlapping that one (grown) need
+// testing: one tree walk per leaf, not per query.
+template <class Vertex, class Edge>
+void SurfaceContact::each_candidate(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
+                                    Real grow, Vertex&& vertex, Edge&& edge) {
+  const int nv = int(verts_.size()), nl = int(leaves_.size());
+  const int nt = omp_get_max_threads();
+  if (found_.size() < std::size_t(nt)) found_.resize(std::size_t(nt));
+  for (std::vector<Pair>& f : found_) f.clear();
+  const Vec3 r{grow, grow, grow};
+#pragma omp parallel num_threads(nt)
+  {
+    std::vector<Pair>& mine = found_[std::size_t(omp_get_thread_num())];
+    std::vector<int> near_leaves, near;
+#pragma omp for schedule(dynamic, 16)
+    for (int l = 0; l < nl; ++l) {
+      const BvhNode& home = tree_[leaves_[l]];
+      near_leaves.clear();
+      leaves_overlapping(tree_, home.lo - r, home.hi + r, [&](int i) { near_leaves.push_back(i); });
+      for (int h = home_start_[l]; h < home_start_[l + 1]; ++h) {
+        const int q = home_[h];
+        if (q < nv) {
+          const int p = verts_[q];
+          const Vec3 lo = vmin(x_old[p], x[p]) - r, hi = vmax(x_old[p], x[p]) + r;
+          for (int i : near_leaves) {
+            const BvhNode& n = tree_[i];
+            if (overlaps(n, lo, hi))
+              for (int k = n.a; k < n.a - n.b; ++k) vertex(p, prims_[k], mine);
+          }
+          continue;
+        }
+        const int e = q - nv;
+        const int a = edges_[e][0], b = edges_[e][1];
+        const Vec3 lo = vmin(vmin(x_old[a], x[a]), vmin(x_old[b], x[b])) - r;
+        const Vec3 hi = vmax(vmax(x_old[a], x[a]), vmax(x_old[b], x[b])) + r;
+        near.clear();
+        for (int i : near_leaves) {
+          const BvhNode& n = tree_[i];
+          if (!overlaps(n, lo, hi)) continue;
+          for (int k = n.a; k < n.a - n.b; ++k)
+            for (int g : tri_edges_[prims_[k]])
+              if (g > e) near.push_back(g);
+        }
+        std::sort(near.begin(), near.end());
+        near.erase(std::unique(near.begin(), near.end()), near.end());
+        for (int g : near) edge(e, g, mine);
+      }
+    }
+  }
+}
+
+// The pairs found, in index order (faces by index, not by the tree's order: the sweeps' order
+// then survives a rebuild, and a checkpoint, which starts from the rest tree).
+void SurfaceContact::gather(std::vector<Pair>& out) const {
+  for (const std::vector<Pair>& m : found_) out.insert(out.end(), m.begin(), m.end());
+  std::sort(out.begin(), out.end(),
+            [](const Pair& a, const Pair& b) { return a.p != b.p ? a.p < b.p : a.f < b.f; });
+}
+
+// The near list (contact.h): every pair of the surfaces within kSkin gaps at x, less the pairs
+// that never count (sharing a node, or rest neighbours: those by a margin, the test decides
+// the others). The tree's leaves hold the faces at x grown by the gap, so queries grown by the
+// skin find every face within it.
+void SurfaceContact::list_near(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
+                               Real skin) {
+  const Real keep2 = skin * skin, rest2 = Real(9 * 0.99) * Real(gap_) * Real(gap_);
+  each_candidate(
+      x_old, x, skin,
+      [&](int p, int f, std::vector<Pair>& out) {
+        const Tri& t = tris_[f];
+        if (t.v[0] == p || t.v[1] == p || t.v[2] == p) return;
+        const Vec3 q = collide::closest_on_triangle(x[p], x[t.v[0]], x[t.v[1]], x[t.v[2]]).point;
+        if (!(norm2(x[p] - q) <= keep2)) return;
+        if (node_body_[p] == tri_body_[f] &&
+            norm2(
+                x0_[p] -
+                collide::closest_on_triangle(x0_[p], x0_[t.v[0]], x0_[t.v[1]], x0_[t.v[2]]).point) <
+                rest2)
+          return;
+        out.push_back({p, f, Vec3()});
+      },
+      [&](int e, int g, std::vector<Pair>& out) {
+        const std::array<int, 2>&E = edges_[e], &G = edges_[g];
+        if (E[0] == G[0] || E[0] == G[1] || E[1] == G[0] || E[1] == G[1]) return;
+        auto dist2 = [&](const std::vector<Vec3>& y) {
+          Real s, t;
+          closest_segments(y[E[0]], y[E[1]], y[G[0]], y[G[1]], s, t);
+          return norm2(y[E[0]] + (y[E[1]] - y[E[0]]) * s - y[G[0]] - (y[G[1]] - y[G[0]]) * t);
+        };
+        if (!(dist2(x) <= keep2)) return;
+        if (node_body_[E[0]] == node_body_[G[0]] && dist2(x0_) < rest2) return;
+        out.push_back({e, -g - 1, Vec3()});
+      });
+  near_.clear();
+  gather(near_);
+  x_ref_ = x;
+  listed_ = true;
+}
+
+// Vertex-face and edge-edge pairs in contact at x, in index order: the pairs the tree's boxes
+// propose (each_candidate) that pass vertex_face or edge_edge. With the near list, the same
+// pairs come from three sources, each through the tree's own box test: the listed pairs (all
+// pairs whose nodes are slow), the queries with a fast node against every leaf, and every
+// query against the leaves holding a fast node.
 void SurfaceContact::detect(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
                             std::vector<Pair>& out) {
   out.clear();
   if (tree_.empty()) return;
-  const int nv = int(verts_.size());
-  const int nt = omp_get_max_threads();
-  std::vector<std::vector<Pair>> part(static_cast<std::size_t>(nt));
-#pragma omp parallel num_threads(nt)
-  {
-    std::vector<Pair>& mine = part[std::size_t(omp_get_thread_num())];
-#pragma omp for schedule(static)
-    for (int j = 0; j < nv; ++j) {
-      const int p = verts_[j];
-      const Vec3 lo = vmin(x_old[p], x[p]), hi = vmax(x_old[p], x[p]);
-      faces_overlapping(tree_, prims_, lo, hi, [&](int f) {
-        if (vertex_face(p, f, x_old, x)) mine.push_back({p, f, Vec3()});
-      });
-    }
+  auto test_vertex = [&](int p, int f, std::vector<Pair>& o) {
+    if (vertex_face(p, f, x_old, x)) o.push_back({p, f, Vec3()});
+  };
+  auto test_edge = [&](int e, int h, std::vector<Pair>& o) {
+    Vec3 n;
+    if (edge_edge(e, h, x_old, x, n)) o.push_back({e, -h - 1, n});
+  };
+  const int nv = int(verts_.size()), nl = int(leaves_.size());
+  // A pair in contact lies within sqrt(g^2 + (g + 4 m)^2) at x when none of its nodes moved
+  // more than m in the step (vertex_face, edge_edge), and that distance changed by at most
+  // 2 d since x_ref_ when none drifted more than d: such pairs are listed. The slack covers
+  // the distances' round-off.
+  const Real g = Real(gap_), skin = Real(kSkin) * g, slow = Real(kSlow) * g;
+  Real scale = 0;
+  int fast = 0;
+  for (int p : verts_) {
+    for (int c = 0; c < 3; ++c) scale = std::max(scale, std::fabs(x[p][c]));
+    fast += norm(x[p] - x_old[p]) > slow;
   }
-  const int ne = int(edges_.size());
+  const Real slack = Real(1e-3) * skin + Real(1e-5) * scale;
+  const Real reach = std::sqrt(g * g + (g + 4 * slow) * (g + 4 * slow));
+  const Real drift = (skin - reach - slack) / 2;
+  if (4 * fast > nv || !(drift > 0)) {  // moving too fast for a list to pay
+    listed_ = false;
+    each_candidate(x_old, x, Real(0), test_vertex, test_edge);
+    gather(out);
+    return;
+  }
+  // Drift is measured past the nodes' mean shift since x_ref_: a shift common to all nodes
+  // changes no distance.
+  auto mark = [&] {
+    Vec3 shift;
+    for (int p : verts_) shift += (x[p] - x_ref_[p]) / Real(nv);
+    int n = 0;
+    for (int p : verts_) {
+      fast_[p] = norm(x[p] - x_old[p]) > slow || norm(x[p] - x_ref_[p] - shift) > drift;
+      n += fast_[p];
+    }
+    return n;
+  };
+  fast_.resize(x.size());
+  if (!listed_ || 4 * mark() > nv) {
+    list_near(x_old, x, skin);
+    mark();
+  }
+  leaf_fast_.assign(std::size_t(nl), 0);
+  for (int l = 0; l < nl; ++l) {
+    const BvhNode& n = tree_[leaves_[l]];
+    for (int k = n.a; k < n.a - n.b; ++k)
+      for (int c = 0; c < 3; ++c) leaf_fast_[l] |= fast_[tris_[prims_[k]].v[c]];
+  }
+  const int nn = int(near_.size()), nt = omp_get_max_threads();
+  if (found_.size() < std::size_t(nt)) found_.resize(std::size_t(nt));
+  for (std::vector<Pair>& f : found_) f.clear();
+  auto box_of = [&](int q, Vec3& lo, Vec3& hi) {  // query q's swept box; true when fast
+    if (q < nv) {
+      const int p = verts_[q];
+      lo = vmin(x_old[p], x[p]), hi = vmax(x_old[p], x[p]);
+      return fast_[p] != 0;
+    }
+    const int a = edges_[q - nv][0], b = edges_[q - nv][1];
+    lo = vmin(vmin(x_old[a], x[a]), vmin(x_old[b], x[b]));
+    hi = vmax(vmax(x_old[a], x[a]), vmax(x_old[b], x[b]));
+    return fast_[a] || fast_[b];
+  };
 #pragma omp parallel num_threads(nt)
   {
-    std::vector<Pair>& mine = part[std::size_t(omp_get_thread_num())];
-    std::vector<int> near;
-#pragma omp for schedule(static)
-    for (int e = 0; e < ne; ++e) {
-      const int a = edges_[e][0], b = edges_[e][1];
-      const Vec3 lo = vmin(vmin(x_old[a], x[a]), vmin(x_old[b], x[b]));
-      const Vec3 hi = vmax(vmax(x_old[a], x[a]), vmax(x_old[b], x[b]));
-      near.clear();
-      faces_overlapping(tree_, prims_, lo, hi, [&](int f) {
-        for (int g : tri_edges_[f])
-          if (g > e) near.push_back(g);
-      });
+    std::vector<Pair>& mine = found_[std::size_t(omp_get_thread_num())];
+    // The listed pairs, each as the tree would propose it.
+#pragma omp for schedule(static) nowait
+    for (int i = 0; i < nn; ++i) {
+      const Pair& c = near_[i];
+      if (c.f >= 0) {
+        const Vec3 lo = vmin(x_old[c.p], x[c.p]), hi = vmax(x_old[c.p], x[c.p]);
+        if (overlaps(tree_[face_leaf_[c.f]], lo, hi)) test_vertex(c.p, c.f, mine);
+        continue;
+      }
+      const int e = c.p, h = -c.f - 1;
+      Vec3 lo, hi;
+      box_of(nv + e, lo, hi);
+      bool proposed = false;
+      for (int k = edge_face_start_[h]; k < edge_face_start_[h + 1] && !proposed; ++k)
+        proposed = overlaps(tree_[face_leaf_[edge_faces_[k]]], lo, hi);
+      if (proposed) test_edge(e, h, mine);
+    }
+    // Queries with a fast node against every leaf their box meets, and every query against
+    // the fast leaves its box meets (a query's box lies in its home leaf's).
+    std::vector<int> near_leaves, near;
+    auto edges_of = [&](int e, const BvhNode& n) {
+      for (int k = n.a; k < n.a - n.b; ++k)
+        for (int h : tri_edges_[prims_[k]])
+          if (h > e) near.push_back(h);
+    };
+    auto test_near = [&](int e) {
       std::sort(near.begin(), near.end());
       near.erase(std::unique(near.begin(), near.end()), near.end());
-      Vec3 nrm;
-      for (int g : near)
-        if (edge_edge(e, g, x_old, x, nrm)) mine.push_back({e, -g - 1, nrm});
+      for (int h : near) test_edge(e, h, mine);
+    };
+#pragma omp for schedule(dynamic, 16)
+    for (int l = 0; l < nl; ++l) {
+      bool any = leaf_fast_[l] != 0;
+      Vec3 lo, hi;
+      for (int k = home_start_[l]; k < home_start_[l + 1] && !any; ++k)
+        any = box_of(home_[k], lo, hi);
+      if (!any) continue;
+      const BvhNode& home = tree_[leaves_[l]];
+      near_leaves.clear();
+      leaves_overlapping(tree_, home.lo, home.hi, [&](int i) { near_leaves.push_back(i); });
+      for (int k = home_start_[l]; k < home_start_[l + 1]; ++k) {
+        const int q = home_[k];
+        if (!box_of(q, lo, hi)) continue;
+        near.clear();
+        for (int i : near_leaves) {
+          const BvhNode& n = tree_[i];
+          if (!overlaps(n, lo, hi)) continue;
+          if (q < nv)
+            for (int j = n.a; j < n.a - n.b; ++j) test_vertex(verts_[q], prims_[j], mine);
+          else
+            edges_of(q - nv, n);
+        }
+        if (q >= nv) test_near(q - nv);
+      }
+      if (!leaf_fast_[l]) continue;
+      for (int i : near_leaves) {
+        const int a = leaf_ord_[i];
+        for (int k = home_start_[a]; k < home_start_[a + 1]; ++k) {
+          const int q = home_[k];
+          if (box_of(q, lo, hi) || !overlaps(home, lo, hi)) continue;  // fast: done above
+          if (q < nv) {
+            for (int j = home.a; j < home.a - home.b; ++j) test_vertex(verts_[q], prims_[j], mine);
+          } else {
+            near.clear();
+            edges_of(q - nv, home);
+            test_near(q - nv);
+          }
+        }
+      }
     }
   }
-  for (const std::vector<Pair>& m : part) out.insert(out.end(), m.begin(), m.end());
-  // Faces in index order, not the tree's: the sweeps' order then survives a rebuild (and a
-  // checkpoint, which starts from the rest tree).
-  std::sort(out.begin(), out.end(),
-            [](const Pair& a, const Pair& b) { return a.p != b.p ? a.p < b.p : a.f < b.f; });
+  gather(out);
+  out.erase(std::unique(out.begin(), out.end(),
+                        [](const Pair& a, const Pair& b) { return a.p == b.p && a.f == b.f; }),
+            out.end());
 }
 
 ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector<Vec3>& x,

@@ -70,6 +70,11 @@ class SurfaceContact {
   double tree_area() const;
   void refit(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x);
   void detect(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x, std::vector<Pair>& out);
+  template <class Vertex, class Edge>
+  void each_candidate(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x, Real grow,
+                      Vertex&& vertex, Edge&& edge);
+  void gather(std::vector<Pair>& out) const;
+  void list_near(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x, Real skin);
   bool vertex_face(int p, int f, const std::vector<Vec3>& x_old, const std::vector<Vec3>& x) const;
   bool edge_edge(int e, int g, const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
                  Vec3& n) const;
@@ -83,6 +88,26 @@ class SurfaceContact {
   std::vector<Real> inv_mass_;  // 0 on pinned nodes
   std::vector<collide::BvhNode> tree_;
   std::vector<int> prims_;
+  // The queries grouped by the leaf that holds a face of theirs (a vertex's first face, an
+  // edge's face), whose box contains their swept boxes: the leaves near it, found by one walk,
+  // serve all its queries. home_[home_start_[l]..home_start_[l + 1]) for leaf leaves_[l]:
+  // vertex j (verts_ index) as j, edge e as verts_.size() + e.
+  std::vector<int> leaves_, home_start_, home_;
+  std::vector<int> leaf_ord_;                      // leaves_ index of each tree node, -1 inside
+  std::vector<int> face_leaf_;                     // the tree node of each face's leaf
+  std::vector<int> vert_face_, edge_face_;         // a face of each vertex (verts_ order), edge
+  std::vector<int> edge_face_start_, edge_faces_;  // the faces of each edge
+  std::vector<std::vector<Pair>> found_;           // per thread, kept between detections
+  // The near list (a Verlet list, as molecular dynamics keeps its neighbours): the pairs
+  // within kSkin gaps of each other at x_ref_, less those that never count. A pair whose
+  // nodes are slow (moved at most kSlow gaps this step and drifted little since x_ref_) can
+  // only touch if it is listed, so only the list, the fast nodes' queries and the fast
+  // nodes' leaves are tested; the pairs found are the same. A cache: a checkpoint needs none.
+  static constexpr double kSkin = 5.0, kSlow = 0.4;
+  std::vector<Pair> near_;
+  std::vector<Vec3> x_ref_;
+  std::vector<std::uint8_t> fast_, leaf_fast_;  // per node, per leaf (leaves_ order)
+  bool listed_ = false;
   double area0_ = 0;
   double gap_ = 0, friction_ = 0;
   int rounds_ = 4, sweeps_ = 4;
