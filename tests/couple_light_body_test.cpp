@@ -72,8 +72,8 @@ TEST_P(CoupleLightBall, RisesAndComesToRestFloating) {
   std::printf(
       "near-surface %d: height %.3f -> %.3f m (%.4f over 1.5-2 s); kinetic energy peak %.3g J, "
       "1-1.5 s %.3g, 1.5-2 s %.3g; %ld crossed, %ld inside\n",
-      int(near_surface), height.front(), height.back(), *settled.second - *settled.first, peak,
-      mid, late, crossed, inside);
+      int(near_surface), height.front(), height.back(), *settled.second - *settled.first, peak, mid,
+      late, crossed, inside);
   EXPECT_GT(height.back() - height.front(), 0.1) << "the ball did not rise";
   // At rest: its height within a particle spacing (12 mm, the water surface's own roughness).
   EXPECT_LT(*settled.second - *settled.first, 0.012) << "the ball does not rest at one height";
@@ -91,12 +91,14 @@ INSTANTIATE_TEST_SUITE_P(Modes, CoupleLightBall, ::testing::Bool(),
 // A light cloth (0.2 kg/m2, pinned along two opposite edges) under a falling column of water
 // 55 times heavier, in both ray-traced modes. Disabled: it fails in both modes, with either
 // exchange (the open item of docs/validation.md, "A light cloth under a falling column"); run
-// it by hand with --gtest_also_run_disabled_tests (SPHFEM_TEST_IMPLICIT_EXCHANGE=1 for the
-// implicit exchange, SPHFEM_TEST_TRACE=1 for a line per step). The water lands at about 1 m/s; the
-// cloth sags, holds it and comes to rest. Asserted: no node or particle is shot off (nodes at most
-// 3 m/s, the water at most 2 m/s), the water at rest on the cloth does not keep pressing into it
-// (every particle under 0.5 m/s over the last 0.1 s), kinetic energy decays at the end, and
-// nothing crosses the cloth.
+// it by hand with --gtest_also_run_disabled_tests. Knobs for that: SPHFEM_TEST_IMPLICIT_EXCHANGE=1
+// (the implicit exchange), SPHFEM_TEST_DT_MAX (seconds), SPHFEM_TEST_PIN_ALL=1 (the whole cloth
+// pinned: the same water on an immovable sheet), SPHFEM_TEST_TRACE=1 (a line per step).
+// The water lands at about 1 m/s; the cloth sags nearly to the floor and the water runs off its
+// free edges. Asserted, as laws: the total energy (kinetic, gravitational and elastic, water and
+// cloth) never rises above the start's (the impact, damping and viscosity only take it); no node
+// is shot off (at most 3 m/s, above the 2.4 m/s of a fall from the column's top to the floor);
+// the cloth's kinetic energy decays at the end; nothing crosses the cloth.
 class CoupleLightCloth : public ::testing::TestWithParam<bool> {};
 
 TEST_P(CoupleLightCloth, DISABLED_SagsUnderAFallingColumnWithoutJitter) {
@@ -113,64 +115,63 @@ TEST_P(CoupleLightCloth, DISABLED_SagsUnderAFallingColumnWithoutJitter) {
                                      {"min": [0.265, 0, 0], "max": [0.3, 0.3, 0.3]}]}}]
   })");
   j["coupling"]["near_surface_density"] = near_surface;
+  if (std::getenv("SPHFEM_TEST_PIN_ALL")) j["bodies"][0]["pinned"]["boxes"][0]["max"][0] = 0.3;
+  if (const char* e = std::getenv("SPHFEM_TEST_DT_MAX")) j["simulation"]["dt_max"] = std::atof(e);
   if (const char* e = std::getenv("SPHFEM_TEST_IMPLICIT_EXCHANGE"))
     j["coupling"]["implicit_exchange"] = std::string(e) == "1";
   const SceneSpec scene = parse_scene(j, "cloth.json");
   validate_scene(scene, "cloth.json");
   Simulation sim(scene, Backend::Cpu);
-  const double duration = 0.5, settle = 0.4;
-  double node_max = 0, fluid_max = 0, fluid_late = 0, e_mid = 0, e_late = 0;
+  const Vec3 g = sim.fluid_model().params.gravity;
+  const double mp = double(sim.fluid_model().params.mass);
+  const std::vector<Real>& node_mass = sim.bodies_model().mass;
+  // Kinetic, gravitational and elastic energy of water and cloth, from snapshots.
+  auto total_energy = [&](const FluidSnapshot& f, const BodySnapshot& b) {
+    double e = sim.bodies()->kinetic_energy() + sim.bodies()->elastic_energy();
+    for (int i = 0; i < b.n; ++i) e -= double(node_mass[std::size_t(i)]) * double(dot(g, b.x[i]));
+    for (int i = 0; i < f.n; ++i) e += mp * (0.5 * double(norm2(f.v[i])) - double(dot(g, f.x[i])));
+    return e;
+  };
+  const double duration = 0.5;
+  double node_max = 0, fluid_max = 0, e_mid = 0, e_late = 0, e_start = 0, e_peak = 0, t_peak = 0;
   long crossed = 0;
   while (sim.time() < duration - 1e-9) {
+    if (sim.steps() == 0) {
+      BodySnapshot b;
+      sim.bodies()->snapshot(b);
+      FluidSnapshot f;
+      sim.snapshot(f);
+      e_start = e_peak = total_energy(f, b);
+    }
     const double dt = sim.step(duration - sim.time()).dt;
     BodySnapshot b;
     sim.bodies()->snapshot(b);
     FluidSnapshot f;
     sim.snapshot(f);
-    double vn = 0, vf = 0, e = sim.bodies()->kinetic_energy();
+    double vn = 0, vf = 0;
+    const double ek = sim.bodies()->kinetic_energy(), E = total_energy(f, b);
     for (const Vec3& v : b.v) vn = std::max(vn, double(norm(v)));
-    // The water on the cloth: above its lowest node less a particle diameter (what runs off
-    // its free edges falls to the floor, at up to 2 m/s).
-    double low = 1e9, on = 0;
-    for (const Vec3& x : b.x) low = std::min(low, double(x.y));
-    for (int i = 0; i < f.n; ++i) {
-      vf = std::max(vf, double(norm(f.v[i])));
-      if (double(f.x[i].y) > low - 0.01) on = std::max(on, double(norm(f.v[i])));
-    }
+    for (int i = 0; i < f.n; ++i) vf = std::max(vf, double(norm(f.v[i])));
     node_max = std::max(node_max, vn);
-    fluid_max = std::max(fluid_max, on);
-    if (sim.time() > settle) fluid_late = std::max(fluid_late, on);
-    if (sim.time() > 0.3 && sim.time() <= settle) e_mid = std::max(e_mid, e);
-    if (sim.time() > settle) e_late = std::max(e_late, e);
+    fluid_max = std::max(fluid_max, vf);
+    if (E > e_peak) e_peak = E, t_peak = sim.time();
+    if (sim.time() > 0.3 && sim.time() <= 0.4) e_mid = std::max(e_mid, ek);
+    if (sim.time() > 0.4) e_late = std::max(e_late, ek);
     const RayCouplingStats& st = sim.coupling()->stats();
-    if (std::getenv("SPHFEM_TEST_TRACE")) {
-      // Total energy: kinetic, gravitational (g = 9.81 down y) and elastic.
-      double E = sim.bodies()->kinetic_energy() + sim.bodies()->elastic_energy();
-      for (int i = 0; i < b.n; ++i)
-        E += 9.81 * double(sim.bodies_model().mass[std::size_t(i)]) * double(b.x[i].y);
-      const double mp = double(sim.fluid_model().params.mass);
-      for (int i = 0; i < f.n; ++i)
-        E += mp * (0.5 * double(norm2(f.v[i])) + 9.81 * double(f.x[i].y));
-      std::printf("E %.6f ", E);
-      int k = 0;
-      for (int i = 0; i < f.n; ++i)
-        if (norm(f.v[i]) > norm(f.v[k])) k = i;
-      std::printf(
-          "t %.4f dt %.2e node %.3f fluid %.3f at (%.3f %.3f %.3f) v (%.2f %.2f %.2f) "
-          "contacts %ld rounds %ld cg %ld\n",
-          sim.time(), dt, vn, vf, f.x[k].x, f.x[k].y, f.x[k].z, f.v[k].x, f.v[k].y, f.v[k].z,
-          st.contacts, st.joint_rounds, st.joint_iterations);
-    }
+    if (std::getenv("SPHFEM_TEST_TRACE"))
+      std::printf("E %.6f t %.4f dt %.2e node %.3f fluid %.3f contacts %ld rounds %ld cg %ld\n", E,
+                  sim.time(), dt, vn, vf, st.contacts, st.joint_rounds, st.joint_iterations);
     crossed += st.crossed;
     sim.coupling()->reset_stats();
   }
   std::printf(
-      "near-surface %d: fastest node %.3f m/s, fastest particle %.3f m/s (%.3f after %.1f s); "
-      "cloth kinetic energy 0.3-0.4 s %.3g J, 0.4-0.5 s %.3g J; %ld crossed\n",
-      int(near_surface), node_max, fluid_max, fluid_late, settle, e_mid, e_late, crossed);
+      "near-surface %d: total energy %.4f J at the start, at most %.4f J (%.3f s); fastest node "
+      "%.3f m/s, fastest particle %.3f m/s; cloth kinetic energy 0.3-0.4 s %.3g J, 0.4-0.5 s "
+      "%.3g J; %ld crossed\n",
+      int(near_surface), e_start, e_peak, t_peak, node_max, fluid_max, e_mid, e_late, crossed);
+  // 0.1 % for the float sums of 640 particles' energies.
+  EXPECT_LE(e_peak, e_start * 1.001) << "energy created";
   EXPECT_LT(node_max, 3.0);
-  EXPECT_LT(fluid_max, 2.0);
-  EXPECT_LT(fluid_late, 0.5);
   EXPECT_LE(e_late, e_mid * 1.2);
   EXPECT_EQ(crossed, 0);
 }

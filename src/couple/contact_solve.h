@@ -17,7 +17,8 @@
 // alpha) M + dt (dt + beta) K, the unknowns are every node of the bodies and the solve sees
 // the velocity change the next implicit step will make of the impulses: a light node held by
 // its elements is not taken for a free one (docs/design.md). An outer loop drops contacts that
-// would pull and adds those pushed into approach, until the set no longer changes. Node sums run
+// would pull and adds those pushed into approach, until the set no longer changes; in its later
+// rounds it only drops (join = false), so it cannot cycle. Node sums run
 // over a list sorted by node in a fixed order, and every particle gets exactly -J_c: momentum is
 // exact, bits are the same on any thread count.
 #pragma once
@@ -187,7 +188,7 @@ void node_gather(Exec& ex, const Contact* contacts, const std::uint32_t* vals,
 // approach joins it (normal only). Returns the number of changes.
 template <class Exec>
 int contact_update(Exec& ex, Contact* contacts, int m, const std::uint32_t* slot, const Vec3* dV,
-                   Real tol) {
+                   Real tol, bool join = true) {
   const double changes = reduce_sum(ex, m, [=] SPHFEM_LAMBDA(int c) -> double {
     Contact& ct = contacts[c];
     ct.J = ct.mode ? ct.s - ct.t : Vec3();
@@ -198,6 +199,7 @@ int contact_update(Exec& ex, Contact* contacts, int m, const std::uint32_t* slot
       }
       return 0.0;
     }
+    if (!join) return 0.0;
     Vec3 u = ct.u0;
     for (int j = 0; j < 3; ++j)
       if (ct.node[j] >= 0) u += dV[node_slot(ct, c, j, slot)] * ct.w[j];

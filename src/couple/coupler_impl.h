@@ -111,7 +111,8 @@ class CouplerT final : public Coupler {
     }
 
     // Active set: the approaching contacts first; then those that would pull leave it and
-    // those pushed into approach join it, until it stays the same.
+    // those pushed into approach join it, until it stays the same. From half the rounds on,
+    // contacts only leave: a set that only shrinks cannot cycle to the cap.
     const Real mp = fluid.mass, inv_mp = Real(1) / fluid.mass;
     const Real fastest =
         reduce_max(ex_, m, Real(0), [=] SPHFEM_LAMBDA(int k) -> Real { return norm(c[k].u0); });
@@ -131,7 +132,7 @@ class CouplerT final : public Coupler {
       }
       couple::contact_apply(ex_, c, m, at, dV, mp);
       ++stats.rounds;
-      if (couple::contact_update(ex_, c, m, at, dV, tol) == 0) break;
+      if (couple::contact_update(ex_, c, m, at, dV, tol, round < kMaxRounds / 2) == 0) break;
     }
     stats.residual =
         double(couple::contact_residual(ex_, c, m, at, runs > 0 ? dV : nullptr, inv_mp));
