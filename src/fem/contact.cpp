@@ -369,12 +369,12 @@ void SurfaceContact::gather(std::vector<Pair>& out) const {
 // The near list (contact.h): every pair of the surfaces within kSkin gaps at x, less the pairs
 // that never count (sharing a node, or rest neighbours: those by a margin, the test decides
 // the others). The tree's leaves hold the faces at x grown by the gap, so queries grown by the
-// skin find every face within it.
+// skin less 0.9 gaps find every face within it.
 void SurfaceContact::list_near(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
                                Real skin) {
   const Real keep2 = skin * skin, rest2 = Real(9 * 0.99) * Real(gap_) * Real(gap_);
   each_candidate(
-      x_old, x, skin,
+      x_old, x, skin - Real(0.9 * gap_),
       [&](int p, int f, std::vector<Pair>& out) {
         const Tri& t = tris_[f];
         if (t.v[0] == p || t.v[1] == p || t.v[2] == p) return;
