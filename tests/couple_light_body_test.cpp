@@ -92,8 +92,9 @@ INSTANTIATE_TEST_SUITE_P(Modes, CoupleLightBall, ::testing::Bool(),
 // 55 times heavier, in both ray-traced modes. Disabled: it fails in both modes, with either
 // exchange (the open item of docs/validation.md, "A light cloth under a falling column"); run
 // it by hand with --gtest_also_run_disabled_tests. Knobs for that: SPHFEM_TEST_IMPLICIT_EXCHANGE=1
-// (the implicit exchange), SPHFEM_TEST_DT_MAX (seconds), SPHFEM_TEST_PIN_ALL=1 (the whole cloth
-// pinned: the same water on an immovable sheet), SPHFEM_TEST_TRACE=1 (a line per step).
+// (the implicit exchange), SPHFEM_TEST_DT_MAX (seconds), SPHFEM_TEST_SOLVER (wcsph, dfsph),
+// SPHFEM_TEST_PIN_ALL=1 (the whole cloth pinned: the same water on an immovable sheet),
+// SPHFEM_TEST_TRACE=1 (a line per step).
 // The water lands at about 1 m/s; the cloth sags nearly to the floor and the water runs off its
 // free edges. Asserted, as laws: the total energy (kinetic, gravitational and elastic, water and
 // cloth) never rises above the start's (the impact, damping and viscosity only take it); no node
@@ -117,6 +118,7 @@ TEST_P(CoupleLightCloth, DISABLED_SagsUnderAFallingColumnWithoutJitter) {
   j["coupling"]["near_surface_density"] = near_surface;
   if (std::getenv("SPHFEM_TEST_PIN_ALL")) j["bodies"][0]["pinned"]["boxes"][0]["max"][0] = 0.3;
   if (const char* e = std::getenv("SPHFEM_TEST_DT_MAX")) j["simulation"]["dt_max"] = std::atof(e);
+  if (const char* e = std::getenv("SPHFEM_TEST_SOLVER")) j["simulation"]["solver"] = e;
   if (const char* e = std::getenv("SPHFEM_TEST_IMPLICIT_EXCHANGE"))
     j["coupling"]["implicit_exchange"] = std::string(e) == "1";
   const SceneSpec scene = parse_scene(j, "cloth.json");
