@@ -98,11 +98,19 @@ int run_bench(const BenchOptions& opt) {
     // Rows of another column set (an older stage list) are kept in a file of their own.
     if (!first.empty() && first != header)
       std::filesystem::rename(path, opt.out_dir + "/sph_dam_break_" + date + "_before.csv");
-    const bool fresh = !std::filesystem::exists(path);
-    std::ofstream f(path, std::ios::app);
-    if (fresh) f << header << "\n";
-    f << csv;
-    std::printf("\nresults appended to %s\n", path.c_str());
+    std::printf("\n");
+    append_results(opt.out_dir, "sph_dam_break.csv", header, csv);
   }
   return 0;
+}
+
+void append_results(const std::string& dir, const std::string& file, const std::string& header,
+                    const std::string& rows) {
+  io::ensure_directory(dir);
+  const std::string path = dir + "/" + file;
+  const bool fresh = !std::filesystem::exists(path);
+  std::ofstream f(path, std::ios::app);
+  if (fresh) f << header << "\n";
+  f << rows;
+  std::printf("results appended to %s\n", path.c_str());
 }

@@ -25,6 +25,9 @@ constexpr int kFemBenchSteps = 50;
 
 int run_bench(const BenchOptions& opt);
 std::string cpu_model();  // the CPU's model name, for result files
+// Appends rows to dir/file, writing the header line first when the file is new.
+void append_results(const std::string& dir, const std::string& file, const std::string& header,
+                    const std::string& rows);
 int run_fem_bench(const BenchOptions& opt);
 int run_paper_bench(const BenchOptions& opt);  // Table 1 of the paper (bench_paper.cpp)
 // Measured steps of the paper benchmark when --steps is not given.

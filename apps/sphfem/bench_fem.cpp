@@ -238,15 +238,11 @@ int run_fem_bench(const BenchOptions& opt) {
     csv += line;
   }
   if (!opt.out_dir.empty() && !cases.empty()) {
-    io::ensure_directory(opt.out_dir);
-    const std::string path = opt.out_dir + "/fem.csv";
-    const bool fresh = !std::filesystem::exists(path);
-    std::ofstream f(path, std::ios::app);
-    if (fresh)
-      f << "date,device,threads,backend,body,tets,nodes,steps,dt,ms_rotations,ms_assemble,"
-           "ms_solve,ms_integrate,ms_step,cg_iterations,paper_tets,paper_gpu_ms\n";
-    f << csv;
-    std::printf("\nresults appended to %s\n", path.c_str());
+    std::printf("\n");
+    append_results(opt.out_dir, "fem.csv",
+                   "date,device,threads,backend,body,tets,nodes,steps,dt,ms_rotations,ms_assemble,"
+                   "ms_solve,ms_integrate,ms_step,cg_iterations,paper_tets,paper_gpu_ms",
+                   csv);
   }
   if (!bunny.tris.empty() && backend == Backend::Cpu) {
     // The same bunny at about 22k tetrahedra standing free on the floor, contact on and off.
@@ -274,17 +270,11 @@ int run_fem_bench(const BenchOptions& opt) {
                     r.ms_contact, r.held, r.pairs);
       rows += line;
     }
-    if (!opt.out_dir.empty()) {
-      io::ensure_directory(opt.out_dir);
-      const std::string path = opt.out_dir + "/fem_contact.csv";
-      const bool fresh = !std::filesystem::exists(path);
-      std::ofstream f(path, std::ios::app);
-      if (fresh)
-        f << "date,device,threads,case,tets,surface_contact,steps,ms_fem,ms_body_contact,"
-             "wall_held_nodes,contact_pairs\n";
-      f << rows;
-      std::printf("results appended to %s\n", path.c_str());
-    }
+    if (!opt.out_dir.empty())
+      append_results(opt.out_dir, "fem_contact.csv",
+                     "date,device,threads,case,tets,surface_contact,steps,ms_fem,ms_body_contact,"
+                     "wall_held_nodes,contact_pairs",
+                     rows);
   }
   return 0;
 }

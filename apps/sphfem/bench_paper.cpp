@@ -193,16 +193,12 @@ int run_paper_bench(const BenchOptions& opt) {
                   fig8[k].ms / fig8[k].rows, fig8[k].leaks, fig8[k].contacts / fig8[k].rows,
                   fig8[k].rows);
   if (!opt.out_dir.empty()) {
-    io::ensure_directory(opt.out_dir);
-    const std::string path = opt.out_dir + "/paper_table1.csv";
-    const bool fresh = !fs::exists(path);
-    std::ofstream f(path, std::ios::app);
-    if (fresh)
-      f << "date,device,threads,backend,scene,method,elements,particles,steps,ms_fem,ms_sph,"
-           "ms_coupling,ms_total,ms_leak_check,crossed,inside,contacts,paper_fem,paper_sph,"
-           "paper_coupling,paper_total\n";
-    f << csv;
-    std::printf("\nresults appended to %s\n", path.c_str());
+    std::printf("\n");
+    append_results(opt.out_dir, "paper_table1.csv",
+                   "date,device,threads,backend,scene,method,elements,particles,steps,ms_fem,"
+                   "ms_sph,ms_coupling,ms_total,ms_leak_check,crossed,inside,contacts,paper_fem,"
+                   "paper_sph,paper_coupling,paper_total",
+                   csv);
   }
   return 0;
 }
