@@ -144,6 +144,13 @@ SurfaceContact::SurfaceContact(const BodiesModel& m, const ContactSettings& s) {
   for (std::size_t f = tris_.size(); f-- > 0;)
     for (int k = 0; k < 3; ++k) face_of[tris_[f].v[k]] = int(f);
   for (int p : verts_) vert_face_.push_back(face_of[p]);
+  face_edge_.resize(tris_.size());
+  for (std::size_t f = 0; f < tris_.size(); ++f) {
+    Real l = 0;
+    for (int k = 0; k < 3; ++k)
+      l = std::max(l, norm(x0_[tris_[f].v[k]] - x0_[tris_[f].v[(k + 1) % 3]]));
+    face_edge_[f] = l;
+  }
   edge_face_.assign(edges_.size(), -1);
   for (std::size_t f = tris_.size(); f-- > 0;)
     for (int e : tri_edges_[f]) edge_face_[e] = int(f);
@@ -220,12 +227,35 @@ void SurfaceContact::refit(const std::vector<Vec3>& x_old, const std::vector<Vec
   }
 }
 
+// Same-body pairs closer at rest than three gaps or the longer rest edge of the two never
+// count: a surface squeezed along itself brings a vertex within the gap of a face one or two
+// rings away, and pushing it off its own sheet wrinkles the surface and inverts elements.
+// Pair (p, f) as in Pair; the radius is scaled by shrink (the near list keeps a margin).
+bool SurfaceContact::rest_neighbours(int p, int f, Real shrink) const {
+  if (f >= 0) {
+    if (node_body_[p] != tri_body_[f]) return false;
+    const Tri& t = tris_[f];
+    const Vec3 q =
+        collide::closest_on_triangle(x0_[p], x0_[t.v[0]], x0_[t.v[1]], x0_[t.v[2]]).point;
+    const Real r = shrink * std::max(Real(3 * gap_), face_edge_[f]);
+    return norm2(x0_[p] - q) < r * r;
+  }
+  const std::array<int, 2>&E = edges_[p], &G = edges_[-f - 1];
+  if (node_body_[E[0]] != node_body_[G[0]]) return false;
+  Real s, t;
+  closest_segments(x0_[E[0]], x0_[E[1]], x0_[G[0]], x0_[G[1]], s, t);
+  const Vec3 d = x0_[E[0]] + (x0_[E[1]] - x0_[E[0]]) * s - x0_[G[0]] - (x0_[G[1]] - x0_[G[0]]) * t;
+  const Real r =
+      shrink * std::max({Real(3 * gap_), norm(x0_[E[1]] - x0_[E[0]]), norm(x0_[G[1]] - x0_[G[0]])});
+  return norm2(d) < r * r;
+}
+
 // Vertex p is in contact with face f when it lies within the gap in front of the face, or
-// behind it no deeper than the two moved this step, unless it started the step behind the
+// behind it no deeper than the vertex moved relative to the face's corners this step (a
+// motion the two share crosses nothing), unless it started the step behind the
 // face and over it (then it is inside for another reason and must not be pulled through; a
 // vertex beside the face, behind its plane, may slide under it within a step on a wavy
-// surface). Faces that
-// touch p, or lay within three gaps of it at rest on the same body, are its neighbours.
+// surface). Faces that touch p, or are its rest neighbours, never count.
 bool SurfaceContact::vertex_face(int p, int f, const std::vector<Vec3>& x_old,
                                  const std::vector<Vec3>& x) const {
   const Tri& t = tris_[f];
@@ -236,23 +266,18 @@ bool SurfaceContact::vertex_face(int p, int f, const std::vector<Vec3>& x_old,
   const Foot s = foot(x_old[p], x_old[t.v[0]], x_old[t.v[1]], x_old[t.v[2]]);
   if (s.d < -g && s.lateral2 <= g * g) return false;
   if (e.d < Real(0)) {
-    Real reach = norm(x[p] - x_old[p]) + g;
-    Real face = 0;
-    for (int k = 0; k < 3; ++k) face = std::max(face, norm(x[t.v[k]] - x_old[t.v[k]]));
-    if (-e.d > reach + face) return false;
+    const Vec3 dp = x[p] - x_old[p];
+    Real rel = 0;
+    for (int k = 0; k < 3; ++k) rel = std::max(rel, norm(dp - (x[t.v[k]] - x_old[t.v[k]])));
+    if (-e.d > rel + g) return false;
   }
-  if (node_body_[p] == tri_body_[f]) {
-    const Vec3 q =
-        collide::closest_on_triangle(x0_[p], x0_[t.v[0]], x0_[t.v[1]], x0_[t.v[2]]).point;
-    if (norm2(x0_[p] - q) < Real(9) * g * g) return false;
-  }
-  return true;
+  return !rest_neighbours(p, f, Real(1));
 }
 
-// Edges e and g (sharing no node, not within three gaps of each other at rest on one body)
+// Edges e and g (sharing no node, not rest neighbours)
 // are in contact when their closest points, inside both, lie within the gap along the
-// direction that separated them at the step's start, or behind it no deeper than the four
-// nodes moved. Ends of edges are the vertex-face test's.
+// direction that separated them at the step's start, or behind it no deeper than one edge's
+// nodes moved relative to the other's. Ends of edges are the vertex-face test's.
 bool SurfaceContact::edge_edge(int e, int g, const std::vector<Vec3>& x_old,
                                const std::vector<Vec3>& x, Vec3& n) const {
   const std::array<int, 2>&E = edges_[e], &G = edges_[g];
@@ -272,18 +297,12 @@ bool SurfaceContact::edge_edge(int e, int g, const std::vector<Vec3>& x_old,
   const Real d = dot(w, n);
   if (!(d < gap) || norm2(w) - d * d > gap * gap) return false;
   if (d < Real(0)) {
-    Real moved = 0;
-    for (int k : {E[0], E[1], G[0], G[1]}) moved += norm(x[k] - x_old[k]);
-    if (-d > moved + gap) return false;
+    Real rel = 0;
+    for (int a : E)
+      for (int b : G) rel = std::max(rel, norm((x[a] - x_old[a]) - (x[b] - x_old[b])));
+    if (-d > rel + gap) return false;
   }
-  if (node_body_[E[0]] == node_body_[G[0]]) {
-    Real rs, rt;
-    closest_segments(x0_[E[0]], x0_[E[1]], x0_[G[0]], x0_[G[1]], rs, rt);
-    const Vec3 r =
-        x0_[E[0]] + (x0_[E[1]] - x0_[E[0]]) * rs - x0_[G[0]] - (x0_[G[1]] - x0_[G[0]]) * rt;
-    if (norm2(r) < Real(9) * gap * gap) return false;
-  }
-  return true;
+  return !rest_neighbours(e, -g - 1, Real(1));
 }
 
 // The pair at positions x: its nodes, their weights (+ on the side the normal points to), the
@@ -372,7 +391,7 @@ void SurfaceContact::gather(std::vector<Pair>& out) const {
 // skin less 0.9 gaps find every face within it.
 void SurfaceContact::list_near(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
                                Real skin) {
-  const Real keep2 = skin * skin, rest2 = Real(9 * 0.99) * Real(gap_) * Real(gap_);
+  const Real keep2 = skin * skin;
   each_candidate(
       x_old, x, skin - Real(0.9 * gap_),
       [&](int p, int f, std::vector<Pair>& out) {
@@ -380,12 +399,7 @@ void SurfaceContact::list_near(const std::vector<Vec3>& x_old, const std::vector
         if (t.v[0] == p || t.v[1] == p || t.v[2] == p) return;
         const Vec3 q = collide::closest_on_triangle(x[p], x[t.v[0]], x[t.v[1]], x[t.v[2]]).point;
         if (!(norm2(x[p] - q) <= keep2)) return;
-        if (node_body_[p] == tri_body_[f] &&
-            norm2(
-                x0_[p] -
-                collide::closest_on_triangle(x0_[p], x0_[t.v[0]], x0_[t.v[1]], x0_[t.v[2]]).point) <
-                rest2)
-          return;
+        if (rest_neighbours(p, f, Real(0.99))) return;
         out.push_back({p, f, Vec3()});
       },
       [&](int e, int g, std::vector<Pair>& out) {
@@ -397,7 +411,7 @@ void SurfaceContact::list_near(const std::vector<Vec3>& x_old, const std::vector
           return norm2(y[E[0]] + (y[E[1]] - y[E[0]]) * s - y[G[0]] - (y[G[1]] - y[G[0]]) * t);
         };
         if (!(dist2(x) <= keep2)) return;
-        if (node_body_[E[0]] == node_body_[G[0]] && dist2(x0_) < rest2) return;
+        if (rest_neighbours(e, -g - 1, Real(0.99))) return;
         out.push_back({e, -g - 1, Vec3()});
       });
   near_.clear();

@@ -79,9 +79,11 @@ class SurfaceContact {
   bool edge_edge(int e, int g, const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
                  Vec3& n) const;
   bool contact(const Pair& c, const std::vector<Vec3>& x, Contact& out) const;
+  bool rest_neighbours(int p, int f, Real shrink) const;
 
   std::vector<Vec3> x0_;  // rest positions: same-body faces near a vertex at rest never count
   std::vector<Tri> tris_;
+  std::vector<Real> face_edge_;  // each face's longest edge at rest
   std::vector<int> tri_body_, node_body_, verts_;
   std::vector<std::array<int, 2>> edges_;  // unique surface edges
   std::vector<std::array<int, 3>> tri_edges_;
