@@ -333,12 +333,14 @@ class BodySolverT final : public BodySolver {
     return fem::apply_nodes(ex_, nodes(), fe_.data(), p, dt, q);
   }
 
-  // The first solve of a step with the tank's walls as constraints (fem/wall_stages.h): nodes
-  // resting on a wall or heading out of the box are held on it; after the solve, walls that
-  // pull let go, nodes now heading out are held, friction from the walls' impulses joins the
-  // right-hand side, and the step is solved once more (warm-started). A step that touches no
-  // wall is the plain solve; what the second solve still sends out of the box, the last-resort
-  // projection after the step puts back.
+  // The solve of a step with the tank's walls as constraints (fem/wall_stages.h). Nodes
+  // resting on a wall or heading out of the box are held on it; the force the last step's
+  // velocity change predicts (A dv - b) lets go walls that would pull and gives friction in
+  // the right-hand side. After the solve, nodes now heading out are held and the step is solved
+  // again (warm-started, friction from the force just found); a wall found pulling only then
+  // lets go without another solve (the node stays on it this step, the next prediction frees
+  // it). A resting body needs one solve, not two. A step that touches no wall is the plain
+  // solve; what the last solve still sends out of the box, the last-resort projection puts back.
   void solve_with_walls(Real dt, BodyStepInfo& info) {
     const FemSettings& S = model_.settings;
     held_ = false;
@@ -350,7 +352,17 @@ class BodySolverT final : public BodySolver {
     const Vec3 lo(S.box_lo), hi(S.box_hi);
     const fem::WallBox box{lo, hi, Real(1e-5) * norm(hi - lo)};
     std::uint8_t* mask = wall_mask_.data();
+    Vec3* fr = u_.data();  // the friction in b_; u_ is free until the Newton corrections
+    u_.zero();
     held_ = fem::hold_walls(ex_, nv, x_.data(), v_.data(), kNone, box, dt, mask, dv_.data()) > 0;
+    const bool predicted = held_ && warm_;
+    if (predicted) {
+      apply(dt, dv_.data(), q_.data());
+      fem::wall_force(ex_, n_, q_.data(), b_.data(), wall_f_.data());
+      fem::hold_walls(ex_, nv, x_.data(), v_.data(), wall_f_.data(), box, dt, mask, dv_.data());
+      info.held = fem::wall_friction(ex_, nv, mask, wall_f_.data(), v_.data(), dv_.data(),
+                                     Real(S.friction), fr, b_.data());
+    }
     solve(dt, dv_, warm_ || held_, info, held_ ? mask : nullptr);
     if (held_) {
       apply(dt, dv_.data(), q_.data());
@@ -358,11 +370,11 @@ class BodySolverT final : public BodySolver {
     }
     const int changed =
         fem::hold_walls(ex_, nv, x_.data(), v_.data(), wall_f_.data(), box, dt, mask, dv_.data());
-    if (!held_ && changed == 0) return;
+    if (changed == 0 && (!held_ || predicted)) return;
     if (!held_) wall_f_.zero();  // nodes held from now on: no normal impulse known yet
     held_ = true;
     info.held = fem::wall_friction(ex_, nv, mask, wall_f_.data(), v_.data(), dv_.data(),
-                                   Real(S.friction), b_.data());
+                                   Real(S.friction), fr, b_.data());
     solve(dt, dv_, true, info, mask);
   }
 

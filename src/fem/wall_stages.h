@@ -20,7 +20,8 @@ SPHFEM_HD Real onto_wall(Real wall, Real x, Real v, Real dt) { return (wall - x)
 // Marks and targets. First pass (f null): every axis of a node that rests on a wall or would
 // leave the box with the velocity change dv is held. Later passes (f = A dv - b, the force the
 // walls supply): holds that pull are dropped, axes that would now leave the box are added.
-// Held components of dv are set to their targets. Returns how many marks changed.
+// Held components of dv are set to their targets; a dropped one keeps its target until the
+// step is solved again. Returns how many nodes gained a held axis.
 template <class Exec>
 int hold_walls(Exec& ex, const NodeView nv, const Vec3* x, const Vec3* v, const Vec3* f, WallBox w,
                Real dt, std::uint8_t* mask, Vec3* dv) {
@@ -53,7 +54,7 @@ int hold_walls(Exec& ex, const NodeView nv, const Vec3* x, const Vec3* v, const 
     }
     mask[i] = m;
     dv[i] = d;
-    return m != m0 ? 1.0 : 0.0;
+    return (m & ~m0 & 7) ? 1.0 : 0.0;
   });
   return int(changed + 0.5);
 }
@@ -68,24 +69,29 @@ void wall_force(Exec& ex, int n, const Vec3* q, const Vec3* b, Vec3* f) {
 // the whole body feels them within the step (applied to each node after the step instead,
 // a stiff tube sliding on the floor sheared by 7 mm as its nodes stopped one by one): each
 // held node's motion along the walls (the free components of v + dv) is opposed by at most
-// mu times its normal impulse f, and by no more than would stop it were it free. Returns the
-// number of held nodes.
+// mu times its normal impulse f, and by no more than would stop it were it free. fr holds the
+// friction b already has (zero at the step's start); it is replaced. Returns the number of
+// held nodes.
 template <class Exec>
 int wall_friction(Exec& ex, const NodeView nv, const std::uint8_t* mask, const Vec3* f,
-                  const Vec3* v, const Vec3* dv, Real mu, Vec3* b) {
+                  const Vec3* v, const Vec3* dv, Real mu, Vec3* fr, Vec3* b) {
   const double held = reduce_sum(ex, nv.n, [=] SPHFEM_LAMBDA(int i) -> double {
     const std::uint8_t m = mask[i];
-    if (!(m & 7) || nv.pinned[i]) return 0.0;
-    Real normal = 0;
-    for (int c = 0; c < 3; ++c)
-      if (m & (1u << c)) normal += f[i][c] < Real(0) ? -f[i][c] : f[i][c];
-    const Vec3 slide = free_part(v[i] + dv[i], m);  // the motion along the walls
-    const Real s = norm(slide);
-    if (s > Real(0)) {
-      const Real stop = nv.mass[i] * s, limit = mu * normal;
-      b[i] -= slide * ((limit < stop ? limit : stop) / s);
+    Vec3 j;
+    if ((m & 7) && !nv.pinned[i]) {
+      Real normal = 0;
+      for (int c = 0; c < 3; ++c)
+        if (m & (1u << c)) normal += f[i][c] < Real(0) ? -f[i][c] : f[i][c];
+      const Vec3 slide = free_part(v[i] + dv[i], m);  // the motion along the walls
+      const Real s = norm(slide);
+      if (s > Real(0)) {
+        const Real stop = nv.mass[i] * s, limit = mu * normal;
+        j = slide * (-(limit < stop ? limit : stop) / s);
+      }
     }
-    return 1.0;
+    b[i] += j - fr[i];
+    fr[i] = j;
+    return (m & 7) && !nv.pinned[i] ? 1.0 : 0.0;
   });
   return int(held + 0.5);
 }
