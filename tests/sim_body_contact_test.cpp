@@ -35,6 +35,16 @@ SceneSpec load(const nlohmann::json& j, const std::string& name) {
   return s;
 }
 
+// The bodies' kinetic, elastic and gravitational energy (g = 9.81 m/s^2 down y), J.
+double body_energy(Simulation& sim) {
+  const BodiesModel& m = sim.bodies_model();
+  BodySnapshot s;
+  sim.bodies()->snapshot(s);
+  double e = sim.bodies()->kinetic_energy() + sim.bodies()->elastic_energy();
+  for (int i = 0; i < s.n; ++i) e += double(m.mass[i]) * 9.81 * double(s.x[i].y);
+  return e;
+}
+
 struct BallsRun {
   long worst_pairs = 0;      // most intersecting triangle pairs in any checked step
   double drift = 0;          // largest |total momentum| over the run, kg m/s
@@ -202,13 +212,7 @@ TEST(SimBodyContact, BunnyFoldingUnderItsWeightStaysUntangled) {
   scene.fem.contact = true;
   Simulation sim(scene, Backend::Cpu);
   const BodiesModel& m = sim.bodies_model();
-  auto energy = [&] {
-    BodySnapshot s;
-    sim.bodies()->snapshot(s);
-    double e = sim.bodies()->kinetic_energy() + sim.bodies()->elastic_energy();
-    for (int i = 0; i < s.n; ++i) e += double(m.mass[i]) * 9.81 * double(s.x[i].y);
-    return e;
-  };
+  auto energy = [&] { return body_energy(sim); };
   const double e0 = energy();
   double e_max = e0;
   long worst = 0;
@@ -312,14 +316,7 @@ TEST(SimBodyContact, BallThrownAtTheFloorNeverInvertsAnElement) {
   const SceneSpec scene = load(j, "floor");
   Simulation sim(scene, Backend::Cpu);
   const BodiesModel& m = sim.bodies_model();
-  // Kinetic, elastic and gravitational energy (g = 9.81 m/s^2 down y).
-  auto energy = [&] {
-    BodySnapshot s;
-    sim.bodies()->snapshot(s);
-    double e = sim.bodies()->kinetic_energy() + sim.bodies()->elastic_energy();
-    for (int i = 0; i < s.n; ++i) e += double(m.mass[i]) * 9.81 * double(s.x[i].y);
-    return e;
-  };
+  auto energy = [&] { return body_energy(sim); };
   const double e0 = energy();
   int worst = 0;
   double e_max = 0, vy_max = -10;
