@@ -93,6 +93,14 @@ void closest_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3
   }
 }
 
+// The vector between the closest points of edges E and G at positions y (from G's to E's),
+// and their parameters s, t.
+Vec3 between_edges(const std::vector<Vec3>& y, const std::array<int, 2>& E,
+                   const std::array<int, 2>& G, Real& s, Real& t) {
+  closest_segments(y[E[0]], y[E[1]], y[G[0]], y[G[1]], s, t);
+  return y[E[0]] + (y[E[1]] - y[E[0]]) * s - y[G[0]] - (y[G[1]] - y[G[0]]) * t;
+}
+
 }  // namespace
 
 double SurfaceContact::default_gap(const BodiesModel& m) {
@@ -243,8 +251,7 @@ bool SurfaceContact::rest_neighbours(int p, int f, Real shrink) const {
   const std::array<int, 2>&E = edges_[p], &G = edges_[-f - 1];
   if (node_body_[E[0]] != node_body_[G[0]]) return false;
   Real s, t;
-  closest_segments(x0_[E[0]], x0_[E[1]], x0_[G[0]], x0_[G[1]], s, t);
-  const Vec3 d = x0_[E[0]] + (x0_[E[1]] - x0_[E[0]]) * s - x0_[G[0]] - (x0_[G[1]] - x0_[G[0]]) * t;
+  const Vec3 d = between_edges(x0_, E, G, s, t);
   const Real r =
       shrink * std::max({Real(3 * gap_), norm(x0_[E[1]] - x0_[E[0]]), norm(x0_[G[1]] - x0_[G[0]])});
   return norm2(d) < r * r;
@@ -284,13 +291,10 @@ bool SurfaceContact::edge_edge(int e, int g, const std::vector<Vec3>& x_old,
   if (E[0] == G[0] || E[0] == G[1] || E[1] == G[0] || E[1] == G[1]) return false;
   const Real gap = Real(gap_);
   Real s, t;
-  closest_segments(x[E[0]], x[E[1]], x[G[0]], x[G[1]], s, t);
+  const Vec3 w = between_edges(x, E, G, s, t);
   if (!(s > Real(0) && s < Real(1) && t > Real(0) && t < Real(1))) return false;
-  const Vec3 w = x[E[0]] + (x[E[1]] - x[E[0]]) * s - x[G[0]] - (x[G[1]] - x[G[0]]) * t;
   Real s0, t0;
-  closest_segments(x_old[E[0]], x_old[E[1]], x_old[G[0]], x_old[G[1]], s0, t0);
-  const Vec3 w0 = x_old[E[0]] + (x_old[E[1]] - x_old[E[0]]) * s0 - x_old[G[0]] -
-                  (x_old[G[1]] - x_old[G[0]]) * t0;
+  const Vec3 w0 = between_edges(x_old, E, G, s0, t0);
   const Real len0 = norm(w0);
   if (!(len0 > Real(1e-3) * gap)) return false;  // touching at the start: no side to keep
   n = w0 / len0;
@@ -317,8 +321,7 @@ bool SurfaceContact::contact(const Pair& c, const std::vector<Vec3>& x, Contact&
   }
   const std::array<int, 2>&E = edges_[c.p], &G = edges_[-c.f - 1];
   Real s, t;
-  closest_segments(x[E[0]], x[E[1]], x[G[0]], x[G[1]], s, t);
-  const Vec3 w = x[E[0]] + (x[E[1]] - x[E[0]]) * s - x[G[0]] - (x[G[1]] - x[G[0]]) * t;
+  const Vec3 w = between_edges(x, E, G, s, t);
   out = Contact{{E[0], E[1], G[0], G[1]}, {Real(1) - s, s, t - Real(1), -t}, c.n, dot(w, c.n)};
   return true;
 }
@@ -405,12 +408,8 @@ void SurfaceContact::list_near(const std::vector<Vec3>& x_old, const std::vector
       [&](int e, int g, std::vector<Pair>& out) {
         const std::array<int, 2>&E = edges_[e], &G = edges_[g];
         if (E[0] == G[0] || E[0] == G[1] || E[1] == G[0] || E[1] == G[1]) return;
-        auto dist2 = [&](const std::vector<Vec3>& y) {
-          Real s, t;
-          closest_segments(y[E[0]], y[E[1]], y[G[0]], y[G[1]], s, t);
-          return norm2(y[E[0]] + (y[E[1]] - y[E[0]]) * s - y[G[0]] - (y[G[1]] - y[G[0]]) * t);
-        };
-        if (!(dist2(x) <= keep2)) return;
+        Real s, t;
+        if (!(norm2(between_edges(x, E, G, s, t)) <= keep2)) return;
         if (rest_neighbours(e, -g - 1, Real(0.99))) return;
         out.push_back({e, -g - 1, Vec3()});
       });
