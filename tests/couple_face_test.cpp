@@ -227,6 +227,42 @@ TEST_P(CoupleFace, StaticFaceReflectsTheParticle) {
   }
 }
 
+// A contact held at a separation speed b (HitArrays::bias, the near-surface pressure's push
+// handed to the exchange): against an immovable face the particle leaves at exactly b; against
+// the free triangle it leaves at b relative to the face's new velocity, momentum exact, with a
+// push that never pulls: a particle already leaving faster than b keeps its velocity.
+TEST_P(CoupleFace, HeldSeparationSpeedIsMetAndNeverPulls) {
+  const double u = 0.2, v = 0.3, b = 0.4;
+  const Vec3d vp(0.3, -0.2, -0.9);
+  Contact fixed = free_face(u, v, coeffs(1, 0.5), vp);
+  fixed.mn.clear(), fixed.vn.clear();
+  fixed.bias = {Real(b)};
+  fixed.apply(*coupler_, GetParam());
+  // The normal only: the tangential velocity and the restitution law play no part.
+  EXPECT_LT(norm(Vec3d(fixed.vp[0]) - Vec3d(vp.x, vp.y, b)), 1e-6);
+
+  Contact k = free_face(u, v, coeffs(1, 0.5), vp);
+  k.bias = {Real(b)};
+  const CoupleStats st = k.apply(*coupler_, GetParam());
+  EXPECT_EQ(st.exchanges, 1);
+  EXPECT_NEAR(-relative(k, u, v, true, vp).z, b, 1e-5);
+  EXPECT_NEAR(k.vp[0].x, vp.x, 1e-6);
+  EXPECT_LT(norm(momentum(k, true, vp) - momentum(k, false, vp)), 1e-6);
+  EXPECT_LT(st.body_impulse.at(0).z, 0.0);  // pushed away from the particle
+
+  Contact away = free_face(u, v, coeffs(1, 0.5), Vec3d(0, 0, 2.0));
+  away.bias = {Real(b)};
+  EXPECT_EQ(away.apply(*coupler_, GetParam()).exchanges, 0);
+  EXPECT_EQ(away.vp[0].z, 2.0f);
+
+  // NaN: the law, as with no bias at all.
+  Contact law = free_face(u, v, coeffs(1, 0.5), vp), plain = free_face(u, v, coeffs(1, 0.5), vp);
+  law.bias = {Real(NAN)};
+  law.apply(*coupler_, GetParam());
+  plain.apply(*coupler_, GetParam());
+  EXPECT_EQ(norm(Vec3d(law.vp[0]) - Vec3d(plain.vp[0])), 0.0);
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, CoupleFace, ::testing::Values(Backend::Cpu, Backend::Cuda),
                          testing_couple::backend_name);
 

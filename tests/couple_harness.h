@@ -48,6 +48,7 @@ struct Contact {
   Real mass = 1;
   std::vector<int> face;
   std::vector<Real> t, u, v;
+  std::vector<Real> bias;  // HitArrays::bias; empty: none
   // one triangle set; mass empty = static collider (infinite mass, at rest, no impulses)
   std::vector<Vec3> xn, vn, impulse;
   std::vector<Real> mn;
@@ -70,7 +71,7 @@ struct Contact {
     const MemSpace s = space_of(b);
     auto bxp = to_space(s, xp), bvp = to_space(s, vp);
     auto bface = to_space(s, face);
-    auto bt = to_space(s, t), bu = to_space(s, u), bv = to_space(s, v);
+    auto bt = to_space(s, t), bu = to_space(s, u), bv = to_space(s, v), bb = to_space(s, bias);
     const bool dynamic = !mn.empty();
     if (dynamic && impulse.size() != xn.size()) impulse.assign(xn.size(), Vec3());
     auto bxn = to_space(s, xn), bvn = to_space(s, vn), bimp = to_space(s, impulse);
@@ -83,6 +84,7 @@ struct Contact {
     h.t = bt.data();
     h.u = bu.data();
     h.v = bv.data();
+    if (!bias.empty()) h.bias = bb.data();
     FluidArrays f;
     f.space = s;
     f.n = int(xp.size());

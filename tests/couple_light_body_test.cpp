@@ -36,6 +36,9 @@ TEST_P(CoupleLightBall, RisesAndComesToRestFloating) {
                              "damping_alpha": 1.0, "damping_beta": 0.002}}]
   })");
   j["coupling"]["near_surface_density"] = near_surface;
+  // By hand: SPHFEM_TEST_IMPLICIT_EXCHANGE=1, the exchange through the ball's step operator.
+  if (const char* e = std::getenv("SPHFEM_TEST_IMPLICIT_EXCHANGE"))
+    j["coupling"]["implicit_exchange"] = std::string(e) == "1";
   const SceneSpec scene = parse_scene(j, "ball.json");
   validate_scene(scene, "ball.json");
   Simulation sim(scene, Backend::Cpu);
@@ -94,6 +97,7 @@ INSTANTIATE_TEST_SUITE_P(Modes, CoupleLightBall, ::testing::Bool(),
 // it by hand with --gtest_also_run_disabled_tests. Knobs for that: SPHFEM_TEST_IMPLICIT_EXCHANGE=1
 // (the implicit exchange), SPHFEM_TEST_DT_MAX (seconds), SPHFEM_TEST_SOLVER (wcsph, dfsph),
 // SPHFEM_TEST_PIN_ALL=1 (the whole cloth pinned: the same water on an immovable sheet),
+// SPHFEM_TEST_CLOTH_DENSITY (kg/m3; 50 is 0.2 kg/m2),
 // SPHFEM_TEST_TRACE=1 (a line per step).
 // The water lands at about 1 m/s; the cloth sags nearly to the floor and the water runs off its
 // free edges. Asserted, as laws: the total energy (kinetic, gravitational and elastic, water and
@@ -119,6 +123,8 @@ TEST_P(CoupleLightCloth, DISABLED_SagsUnderAFallingColumnWithoutJitter) {
   if (std::getenv("SPHFEM_TEST_PIN_ALL")) j["bodies"][0]["pinned"]["boxes"][0]["max"][0] = 0.3;
   if (const char* e = std::getenv("SPHFEM_TEST_DT_MAX")) j["simulation"]["dt_max"] = std::atof(e);
   if (const char* e = std::getenv("SPHFEM_TEST_SOLVER")) j["simulation"]["solver"] = e;
+  if (const char* e = std::getenv("SPHFEM_TEST_CLOTH_DENSITY"))
+    j["bodies"][0]["material"]["density"] = std::atof(e);
   if (const char* e = std::getenv("SPHFEM_TEST_IMPLICIT_EXCHANGE"))
     j["coupling"]["implicit_exchange"] = std::string(e) == "1";
   const SceneSpec scene = parse_scene(j, "cloth.json");

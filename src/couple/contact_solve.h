@@ -75,6 +75,15 @@ void contact_setup(Exec& ex, const SurfacesView S, const HitView h, const Partic
     c.approaching = un > Real(0) ? 1 : 0;
     c.target = c.approaching ? n * (-cc.restitution * un) + (c.u0 - n * un) * cc.slip : Vec3();
     c.mode = c.approaching;
+    const Real b = h.bias ? h.bias[i] : Real(0);
+    if (b == b && h.bias) {
+      // Held at separation speed b: u.n = -b is u'.n = 0 for u' = u + n b, the normal-only
+      // law (mode 2) on the shifted velocity.
+      c.u0 += n * b;
+      c.approaching = 0;
+      c.target = Vec3();
+      c.mode = dot(c.u0, n) > Real(0) ? 2 : 0;
+    }
     contacts[offset[i]] = c;
   });
 }

@@ -298,6 +298,7 @@ class CouplerT final : public Coupler {
     h.t = a.t;
     h.u = a.u;
     h.v = a.v;
+    h.bias = a.bias;
     return h;
   }
 

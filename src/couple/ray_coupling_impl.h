@@ -39,7 +39,8 @@ class RayCouplingT final : public RayCoupling {
     for (Buffer<int>* b : {&face_, &tank_face_}) *b = Buffer<int>(sp);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       *b = Buffer<Real>(sp);
-    for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_, &near_slip_}) *b = Buffer<Real>(sp);
+    for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_, &near_slip_, &near_push_, &bias_})
+      *b = Buffer<Real>(sp);
     near_face_ = Buffer<int>(sp);
     for (Buffer<Vec3>* b : {&near_n_, &near_vel_, &near_dv_}) *b = Buffer<Vec3>(sp);
     x_pre_ = Buffer<Vec3>(sp);
@@ -139,6 +140,7 @@ class RayCouplingT final : public RayCoupling {
     });
     exec_sync(ex_);
     near_n_active_ = n;
+    near_n_step_ = n;
     p.dist = dist;
     p.normal = nrm;
     p.velocity = vel;
@@ -149,6 +151,8 @@ class RayCouplingT final : public RayCoupling {
 
   void before_bodies(const FluidArrays& f) override {
     ++stats_.steps;
+    push_in_exchange_ = near_n_active_ > 0 && set_.rays && set_.implicit_exchange &&
+                        body_tris_ > 0 && bodies_->last_dt() > 0;
     if (near_n_active_ > 0) return_surface_pressure(f);
     near_n_active_ = 0;
     if (!bodies_) return;
@@ -197,9 +201,16 @@ class RayCouplingT final : public RayCoupling {
   void exchange(const FluidArrays& f) override {
     if (!set_.rays) return;
     // The impulse lands in the nodes' array; collect_body_impulse counts it per body.
+    const bool near = near_n_step_ == f.n && body_tris_ > 0 && set_.implicit_exchange;
+    near_n_step_ = 0;
+    if (near) add_near_contacts(f);
     BodyOperator op(bodies_);
     const bool implicit = set_.implicit_exchange && body_tris_ > 0 && bodies_->last_dt() > 0;
-    const CoupleStats cs = coupler_->apply(hits(), f, surfaces_, implicit ? &op : nullptr);
+    HitArrays h = hits();
+    if (near && push_in_exchange_) h.bias = bias_.data();
+    const CoupleStats cs = coupler_->apply(h, f, surfaces_, implicit ? &op : nullptr);
+    if (push_in_exchange_) return_late_pushes(f);
+    push_in_exchange_ = false;
     stats_.contacts += cs.contacts;
     stats_.joint_rounds += cs.rounds;
     stats_.joint_iterations += cs.iterations;
@@ -210,6 +221,75 @@ class RayCouplingT final : public RayCoupling {
   }
 
   // Public only because nvcc does not allow device lambdas in private member functions.
+
+  // Near-surface density: a particle its ray did not stop that ends the step within a
+  // particle radius in front of its closest face (at the face's new position) joins the
+  // exchange as a contact of that face. The fluid's pressure saw the face at its old velocity;
+  // the body's step then moved it with the pressure's impulse, and a light body moves far: the
+  // contact solves the mismatch with the body's inertia, as a collision, rather than leaving
+  // it to the next step's pressure (the added-mass instability of a staggered coupling).
+  //
+  // A particle whose normal push the exchange took (near_push_) becomes a contact held at the
+  // separation speed the fluid's solve gave it from the face as the fluid saw it, with its
+  // push taken back first: against an immovable face it gets exactly its push again; against a
+  // light one, the face gives way by what the body's step operator says. One whose ray hit
+  // some face, or that ended behind its face, keeps its push (returned late, for the next
+  // step).
+  void add_near_contacts(const FluidArrays& f) {
+    const BodyArrays a = bodies_->arrays();
+    int* face = face_.data();
+    Real *t = t_.data(), *u = u_.data(), *v = v_.data(), *bias = bias_.data();
+    Real* push = near_push_.data();
+    const int* nf = near_face_.data();
+    const Real *nu = near_u_.data(), *nv = near_v_.data();
+    const Vec3 *n0 = near_n_.data(), *vs0 = near_vel_.data();
+    const Vec3* px = f.x;
+    Vec3* pv = f.v;
+    const Vec3* nx = a.x;
+    const Tri* tris = a.surface;
+    const Real reach = Real(0.25) * set_.support;  // the particle radius
+    const bool pushes = push_in_exchange_;
+    parallel_for(ex_, f.n, [=] SPHFEM_LAMBDA(int i) {
+      if (pushes) bias[i] = Real(NAN);
+      if (face[i] >= 0 || nf[i] < 0) return;
+      const Tri tr = tris[nf[i]];
+      const Vec3 p0 = nx[tr.v[0]], p1 = nx[tr.v[1]], p2 = nx[tr.v[2]];
+      const Vec3 c = p0 * (Real(1) - nu[i] - nv[i]) + p1 * nu[i] + p2 * nv[i];
+      const Real d = dot(px[i] - c, couple::face_normal(p0, p1, p2));
+      const bool pushed = pushes && push[i] > Real(0);
+      if (!(d > Real(0) && (pushed || d < reach))) return;
+      face[i] = nf[i];
+      t[i] = Real(0);
+      u[i] = nu[i];
+      v[i] = nv[i];
+      if (!pushed) return;
+      bias[i] = dot(pv[i] - vs0[i], n0[i]);
+      pv[i] -= n0[i] * push[i];
+      push[i] = Real(0);
+    });
+    exec_sync(ex_);
+  }
+
+  // The pushes add_near_contacts could not hand to the exchange, to the faces' nodes for the
+  // next step (as return_surface_pressure does when the exchange takes none).
+  void return_late_pushes(const FluidArrays& f) {
+    const BodyArrays a = bodies_->arrays();
+    const int* face = near_face_.data();
+    const Real *u = near_u_.data(), *v = near_v_.data(), *push = near_push_.data();
+    const Vec3* nrm = near_n_.data();
+    const Tri* tris = a.surface;
+    const Real m = f.mass;
+    node_sums_.add(
+        ex_, 3 * f.n, a.nodes,
+        [=] SPHFEM_LAMBDA(int k, int& node, Vec3& value) {
+          const int i = k / 3, c = k % 3;
+          if (face[i] < 0 || !(push[i] > Real(0))) return;
+          const Real w = c == 0 ? Real(1) - u[i] - v[i] : c == 1 ? u[i] : v[i];
+          node = tris[face[i]].v[c];
+          value = nrm[i] * (-m * w * push[i]);
+        },
+        a.impulse);
+  }
 
   // Baseline: no ray and no drift limit; the bodies' BVH follows them for the leak check.
   DriftLimits baseline_cast(const FluidArrays& f) {
@@ -239,8 +319,18 @@ class RayCouplingT final : public RayCoupling {
     const int* face = near_face_.data();
     const Real *u = near_u_.data(), *v = near_v_.data();
     const Vec3* dv = near_dv_.data();
+    const Vec3* nrm = near_n_.data();
+    const Real* dist = near_dist_.data();
+    Real* push = near_push_.data();
+    const bool keep = push_in_exchange_;
     const Tri* tris = a.surface;
     const Real m = f.mass;
+    // With the implicit exchange the normal push of a particle in front of its face waits for
+    // the exchange, which shares it between the particle and the body by the body's response.
+    parallel_for(ex_, f.n, [=] SPHFEM_LAMBDA(int i) {
+      const Real p = face[i] >= 0 && keep && dist[i] > Real(0) ? dot(dv[i], nrm[i]) : Real(0);
+      push[i] = p > Real(0) ? p : Real(0);
+    });
     stats_.near_surface +=
         long(reduce_sum(ex_, f.n,
                         [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; }) +
@@ -250,7 +340,7 @@ class RayCouplingT final : public RayCoupling {
         [=] SPHFEM_LAMBDA(int k, int& node, Vec3& value) {
           const int i = k / 3, c = k % 3;
           if (face[i] < 0) return;
-          const Vec3 d = dv[i];
+          const Vec3 d = dv[i] - nrm[i] * push[i];
           if (d.x == Real(0) && d.y == Real(0) && d.z == Real(0)) return;
           const Real w = c == 0 ? Real(1) - u[i] - v[i] : c == 1 ? u[i] : v[i];
           node = tris[face[i]].v[c];
@@ -289,7 +379,8 @@ class RayCouplingT final : public RayCoupling {
     for (Buffer<int>* b : {&face_, &tank_face_}) grow_buffer(*b, n);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       grow_buffer(*b, n);
-    for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_, &near_slip_}) grow_buffer(*b, n);
+    for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_, &near_slip_, &near_push_, &bias_})
+      grow_buffer(*b, n);
     grow_buffer(near_face_, n);
     for (Buffer<Vec3>* b : {&x_pre_, &rel_, &near_n_, &near_vel_, &near_dv_}) grow_buffer(*b, n);
   }
@@ -453,9 +544,15 @@ class RayCouplingT final : public RayCoupling {
   // Near-surface density: each particle's closest body face this step.
   Buffer<int> near_face_;
   Buffer<Real> near_dist_, near_u_, near_v_, near_slip_;
+  // With the implicit exchange: the normal push (m/s) the near-surface pressure gave each
+  // particle, left to the exchange; and the exchange's per-particle bias (HitArrays::bias).
+  Buffer<Real> near_push_, bias_;
+  bool push_in_exchange_ = false;
+
   Buffer<Real> face_slip_;  // per body face, its body's slip coefficient
   Buffer<Vec3> near_n_, near_vel_, near_dv_;
   int near_n_active_ = 0;  // particles proximity() found surfaces for, this step
+  int near_n_step_ = 0;    // the same, kept until the exchange
   NodeSums<Exec> node_sums_;
   std::vector<CoupleSurface> surfaces_;
   RayCouplingStats stats_;

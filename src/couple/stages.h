@@ -37,6 +37,7 @@ struct HitView {
   const Real* t = nullptr;
   const Real* u = nullptr;
   const Real* v = nullptr;
+  const Real* bias = nullptr;  // HitArrays::bias
 };
 
 struct ParticleView {

@@ -573,8 +573,8 @@ const ObjectTable& fem_table() {
                    "Body surfaces meet each other and themselves (a fold, two balls): "
                    "vertex-face and edge-edge contact after each step, pushed apart to "
                    "`contact_gap` with inelastic impulses and `friction`, and the step taken "
-                   "again with the contact's impulses. Experimental: a soft bunny whose folds "
-                   "close under a jet still blows up (docs/validation.md).")
+                   "again with the contact's impulses. Experimental: where surfaces close on "
+                   "water, particles still pass between them (docs/validation.md).")
           .number("contact_gap", &FemSpec::contact_gap, "m", kNonNegative,
                   "Distance kept between touching surfaces; 0 is a tenth of the median "
                   "surface edge at rest.")
@@ -607,9 +607,12 @@ const ObjectTable& coupling_table() {
                    "Ray-traced coupling: the joint momentum exchange meets each body through "
                    "the operator of its implicit step, (1 + dt alpha) M + dt (dt + beta) K, so "
                    "a light node held by its elements is not taken for a free one, and the "
-                   "nodes take the solve's velocity change at once. Experimental: it does not "
-                   "yet settle a light cloth under a water column (docs/validation.md). "
-                   "`false`: free nodes of their lumped masses, as in the paper.")
+                   "nodes take the solve's velocity change at once. With "
+                   "`near_surface_density`, the normal push of the near-surface pressure and "
+                   "the particles within a radius of a face join the exchange too. "
+                   "Experimental: it does not yet settle a light cloth under a water column "
+                   "(docs/validation.md). `false`: free nodes of their lumped masses, as in "
+                   "the paper.")
           .boolean("tank_rays", &CouplingSpec::tank_rays,
                    "Ray-cast the tank's six faces too, as static colliders of infinite mass, "
                    "so no particle ever crosses a wall.")

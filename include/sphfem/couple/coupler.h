@@ -45,6 +45,11 @@ struct HitArrays {
   const Real* t = nullptr;
   const Real* u = nullptr;
   const Real* v = nullptr;
+  // Optional, per particle: a contact that keeps a separation speed rather than obeying the
+  // restitution and slip law. Finite bias b: the contact holds the normal relative velocity
+  // at b (the particle leaving the face at b m/s, or faster) with a normal impulse that never
+  // pulls; NaN: the law. (The near-surface pressure's push, couple/ray_coupling.h.)
+  const Real* bias = nullptr;
 };
 
 // One set of triangles the hits index, with its nodes, in the coupler's memory space. The
