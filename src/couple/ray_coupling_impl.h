@@ -151,8 +151,7 @@ class RayCouplingT final : public RayCoupling {
 
   void before_bodies(const FluidArrays& f) override {
     ++stats_.steps;
-    push_in_exchange_ = near_n_active_ > 0 && set_.rays && set_.implicit_exchange &&
-                        body_tris_ > 0 && bodies_->last_dt() > 0;
+    push_in_exchange_ = near_n_active_ > 0 && set_.rays && implicit_exchange_usable();
     if (near_n_active_ > 0) return_surface_pressure(f);
     near_n_active_ = 0;
     if (!bodies_) return;
@@ -205,7 +204,7 @@ class RayCouplingT final : public RayCoupling {
     near_n_step_ = 0;
     if (near) add_near_contacts(f);
     BodyOperator op(bodies_);
-    const bool implicit = set_.implicit_exchange && body_tris_ > 0 && bodies_->last_dt() > 0;
+    const bool implicit = implicit_exchange_usable();
     HitArrays h = hits();
     if (near && push_in_exchange_) h.bias = bias_.data();
     const CoupleStats cs = coupler_->apply(h, f, surfaces_, implicit ? &op : nullptr);
@@ -272,21 +271,30 @@ class RayCouplingT final : public RayCoupling {
 
   // The pushes add_near_contacts could not hand to the exchange, to the faces' nodes for the
   // next step (as return_surface_pressure does when the exchange takes none).
-  void return_late_pushes(const FluidArrays& f) {
+  void return_late_pushes(const FluidArrays& f) { return_near_impulse(f, Real(0), Real(1)); }
+
+  // To the nodes of each particle's closest face (near_face_), the opposite of the particle's
+  // momentum change m (a_dv dv_i + a_push push_i n_i), by the barycentric weights of the
+  // closest point, summed node by node in particle order (core/node_sums.h). dv_i is the
+  // near-surface pressure's change (near_dv_), push_i n_i its normal push kept for the
+  // exchange (near_push_, never negative).
+  void return_near_impulse(const FluidArrays& f, Real a_dv, Real a_push) {
     const BodyArrays a = bodies_->arrays();
     const int* face = near_face_.data();
     const Real *u = near_u_.data(), *v = near_v_.data(), *push = near_push_.data();
-    const Vec3* nrm = near_n_.data();
+    const Vec3 *dv = near_dv_.data(), *nrm = near_n_.data();
     const Tri* tris = a.surface;
     const Real m = f.mass;
     node_sums_.add(
         ex_, 3 * f.n, a.nodes,
         [=] SPHFEM_LAMBDA(int k, int& node, Vec3& value) {
           const int i = k / 3, c = k % 3;
-          if (face[i] < 0 || !(push[i] > Real(0))) return;
+          if (face[i] < 0) return;
+          const Vec3 d = dv[i] * a_dv + nrm[i] * (a_push * push[i]);
+          if (d.x == Real(0) && d.y == Real(0) && d.z == Real(0)) return;
           const Real w = c == 0 ? Real(1) - u[i] - v[i] : c == 1 ? u[i] : v[i];
           node = tris[face[i]].v[c];
-          value = nrm[i] * (-m * w * push[i]);
+          value = d * (-m * w);
         },
         a.impulse);
   }
@@ -315,16 +323,12 @@ class RayCouplingT final : public RayCoupling {
   // closest face's nodes by the barycentric weights of the closest point, summed node by node
   // in particle order (core/node_sums.h).
   void return_surface_pressure(const FluidArrays& f) {
-    const BodyArrays a = bodies_->arrays();
     const int* face = near_face_.data();
-    const Real *u = near_u_.data(), *v = near_v_.data();
     const Vec3* dv = near_dv_.data();
     const Vec3* nrm = near_n_.data();
     const Real* dist = near_dist_.data();
     Real* push = near_push_.data();
     const bool keep = push_in_exchange_;
-    const Tri* tris = a.surface;
-    const Real m = f.mass;
     // With the implicit exchange the normal push of a particle in front of its face waits for
     // the exchange, which shares it between the particle and the body by the body's response.
     parallel_for(ex_, f.n, [=] SPHFEM_LAMBDA(int i) {
@@ -335,18 +339,7 @@ class RayCouplingT final : public RayCoupling {
         long(reduce_sum(ex_, f.n,
                         [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; }) +
              0.5);
-    node_sums_.add(
-        ex_, 3 * f.n, a.nodes,
-        [=] SPHFEM_LAMBDA(int k, int& node, Vec3& value) {
-          const int i = k / 3, c = k % 3;
-          if (face[i] < 0) return;
-          const Vec3 d = dv[i] - nrm[i] * push[i];
-          if (d.x == Real(0) && d.y == Real(0) && d.z == Real(0)) return;
-          const Real w = c == 0 ? Real(1) - u[i] - v[i] : c == 1 ? u[i] : v[i];
-          node = tris[face[i]].v[c];
-          value = d * (-m * w);
-        },
-        a.impulse);
+    return_near_impulse(f, Real(1), Real(-1));
   }
 
   // What the fluid gave each body since its last step (rays, samples and near-surface
@@ -457,6 +450,11 @@ class RayCouplingT final : public RayCoupling {
       v[i] = tv[i];
       len[i] = tl[i];
     });
+  }
+
+  // coupling.implicit_exchange asks for it; it needs body faces and a body step to answer.
+  bool implicit_exchange_usable() const {
+    return set_.implicit_exchange && body_tris_ > 0 && bodies_->last_dt() > 0;
   }
 
   HitArrays hits() const {
