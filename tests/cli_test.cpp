@@ -206,6 +206,22 @@ TEST_F(Cli, RunOfAnObstacleSceneWritesItsSurface) {
   EXPECT_EQ(ps.cell_data[0].name, "obstacle");
 }
 
+// The paddle scene: `check` names the obstacle's path, and a short run writes its frames.
+TEST_F(Cli, PaddleSceneChecksAndRuns) {
+  const std::string scene = source_file("scenes/paddle.json");
+  const Result c = cli("check " + scene);
+  ASSERT_EQ(c.code, 0) << c.out;
+  EXPECT_NE(c.out.find("obstacle    paddle (box): 12 triangles, on a 3-key path from 0 s to 2 s"),
+            std::string::npos)
+      << c.out;
+  const fs::path out = dir_ / "out";
+  const Result r = cli("run " + scene + " --duration 0.04 --quiet --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(fs::exists(out / "obstacles.pvd"));
+  EXPECT_TRUE(fs::exists(out / "frames" / "obstacles_000001.vtu"));
+  EXPECT_NE(r.out.find("0 particles crossed"), std::string::npos) << r.out;
+}
+
 TEST_F(Cli, BadBodyExitsWithCodeTwoAndWritesNothing) {
   std::string scene = read_text(source_file("scenes/cantilever.json"));
   const std::string poisson = "\"poisson\": 0.3";

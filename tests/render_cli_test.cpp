@@ -157,6 +157,46 @@ TEST_F(RenderCli, BodyOnlyRunIsDrawn) {
   }
 }
 
+// An obstacle on a path is drawn where it is in each frame (frames/obstacles_*.vtu): the last
+// picture of a run where it moves matches that of a run where it stands at its end pose, and
+// not that of one where it stands at its start.
+TEST_F(RenderCli, MovingObstacleIsDrawnWhereItIs) {
+  auto picture = [&](const std::string& name, const std::string& obstacle) {
+    const fs::path out = dir_ / name;
+    const std::string scene = R"({
+      "simulation": { "duration": 0.02, "dt_max": 0.002 },
+      "domain": { "min": [-0.3, 0, -0.3], "max": [0.3, 0.4, 0.3] },
+      "bodies": [ { "name": "block", "shape": "box", "position": [0, 0.1, 0],
+                    "size": [0.1, 0.1, 0.1], "resolution": 2,
+                    "pinned": { "boxes": [ { "min": [-1, -1, -1], "max": [1, 1, 1] } ] },
+                    "material": { "density": 1000, "young": 1e6, "poisson": 0.3 } } ],
+      "obstacles": [ )" + obstacle +
+                              R"( ],
+      "output": { "fps": 100 }
+    })";
+    EXPECT_EQ(cli("run " + write(name + ".json", scene) + " --quiet --out " + out.string()).code,
+              0);
+    const Result r = cli("render " + out.string() + " --frames last --size 320x240");
+    EXPECT_EQ(r.code, 0) << r.out;
+    return read_png(out / "images" / "bodies_000002.png");
+  };
+  auto differ = [](const Picture& a, const Picture& b) {
+    int n = 0;
+    for (std::size_t i = 0; i + 2 < a.rgb.size() && i + 2 < b.rgb.size(); i += 3)
+      n += a.rgb[i] != b.rgb[i] || a.rgb[i + 1] != b.rgb[i + 1] || a.rgb[i + 2] != b.rgb[i + 2];
+    return n;
+  };
+  const Picture moving = picture("moving", R"({ "min": [-0.25, 0.05, 0.1],
+      "max": [-0.15, 0.15, 0.2],
+      "path": [ { "time": 0 }, { "time": 0.02, "translate": [0.35, 0, 0] } ] })");
+  const Picture end = picture("end", R"({ "min": [0.1, 0.05, 0.1], "max": [0.2, 0.15, 0.2] })");
+  const Picture start =
+      picture("start", R"({ "min": [-0.25, 0.05, 0.1], "max": [-0.15, 0.15, 0.2] })");
+  ASSERT_GT(moving.width, 0);
+  EXPECT_LT(differ(moving, end), 50);
+  EXPECT_GT(differ(moving, start), 500);
+}
+
 TEST_F(RenderCli, RunWithRenderDrawsEveryFrame) {
   const fs::path out = run(kFluidScene, "--render");
   for (int f = 0; f <= 2; ++f)

@@ -15,6 +15,7 @@
 #include "sphfem/scene/fields.h"
 #include "sphfem/scene/limits.h"
 #include "sphfem/scene/load.h"
+#include "sphfem/scene/obstacles.h"
 #include "sphfem/sim/run.h"
 #include "sphfem/sim/state.h"
 #include "sphfem/sph/solver.h"
@@ -75,6 +76,20 @@ int cmd_check(const std::string& path) {
           body.tets.size(), body.surface.size(), mass, pinned);
     }
     bytes += body_bytes(b.nodes, b.elements, double(b.surface.size()));
+  }
+  if (!s.obstacles.empty()) {
+    const ObstaclesModel ob = compile_obstacles(s, path);
+    for (int k = 0; k < ob.count(); ++k) {
+      const ObstacleSpec& o = s.obstacles[std::size_t(k)];
+      std::printf("obstacle    %s (%s): %d triangles, ", o.name.c_str(),
+                  o.shape == ObstacleShape::Box ? "box" : "mesh",
+                  ob.tri_offset[std::size_t(k) + 1] - ob.tri_offset[std::size_t(k)]);
+      if (o.path.empty())
+        std::printf("fixed\n");
+      else
+        std::printf("on a %zu-key path from %.4g s to %.4g s\n", o.path.size(), o.path.front().time,
+                    o.path.back().time);
+    }
   }
   std::printf("time        %.4g s, frames every %.4g s (%.0f frames)\n", s.simulation.duration,
               1.0 / s.output.fps, frame_count(s.simulation.duration, s.output.fps));

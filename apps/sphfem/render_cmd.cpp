@@ -39,7 +39,7 @@ namespace fs = std::filesystem;
 // The files of one output frame, relative to the run folder; either may be empty.
 struct FrameFiles {
   long number = 0;
-  std::string fluid, bodies;
+  std::string fluid, bodies, obstacles;
 };
 
 std::string slurp(const std::string& path) {
@@ -76,20 +76,28 @@ std::vector<std::string> read_pvd(const std::string& path) {
 // older ones); a run that wrote PLY only has no collection, so its frames/ folder is listed.
 std::vector<FrameFiles> list_frames(const std::string& dir) {
   std::map<long, FrameFiles> frames;
-  auto add = [&](const std::string& file, bool fluid, long fallback) {
+  auto add = [&](const std::string& file, std::string FrameFiles::*kind, long fallback) {
     const long n = frame_number(file, fallback);
     FrameFiles& f = frames[n];
     f.number = n;
-    (fluid ? f.fluid : f.bodies) = file;
+    f.*kind = file;
   };
   const bool fluid_pvd = fs::exists(dir + "/fluid.pvd");
   if (fluid_pvd) {
     const auto files = read_pvd(dir + "/fluid.pvd");
-    for (std::size_t i = 0; i < files.size(); ++i) add(files[i], true, long(i));
+    for (std::size_t i = 0; i < files.size(); ++i) add(files[i], &FrameFiles::fluid, long(i));
   }
   if (fs::exists(dir + "/bodies.pvd")) {
     const auto files = read_pvd(dir + "/bodies.pvd");
-    for (std::size_t i = 0; i < files.size(); ++i) add(files[i], false, long(i));
+    for (std::size_t i = 0; i < files.size(); ++i) add(files[i], &FrameFiles::bodies, long(i));
+  }
+  // Obstacles on a path have a file per frame; only frames with fluid or bodies are listed.
+  if (!frames.empty() && fs::exists(dir + "/obstacles.pvd")) {
+    const auto files = read_pvd(dir + "/obstacles.pvd");
+    for (std::size_t i = 0; i < files.size(); ++i) {
+      const auto it = frames.find(frame_number(files[i], long(i)));
+      if (it != frames.end()) it->second.obstacles = files[i];
+    }
   }
   if (!fluid_pvd && fs::is_directory(io::frames_dir(dir))) {
     std::vector<std::string> ply;
@@ -100,7 +108,7 @@ std::vector<FrameFiles> list_frames(const std::string& dir) {
         ply.push_back("frames/" + name);
     }
     std::sort(ply.begin(), ply.end());
-    for (const std::string& f : ply) add(f, true, 0);
+    for (const std::string& f : ply) add(f, &FrameFiles::fluid, 0);
   }
   std::vector<FrameFiles> out;
   for (auto& [n, f] : frames) out.push_back(f);
@@ -191,8 +199,10 @@ LoadedFrame load_frame(const std::string& dir, const FrameFiles& f) {
     }
   }
   if (!f.bodies.empty()) out.frame.meshes = render::body_meshes(io::read_vtu(dir + "/" + f.bodies));
-  // The static obstacles, beside the frames (sim/run.cpp writes them once).
-  const std::string obstacles = dir + "/obstacles.vtu";
+  // Obstacles on a path: this frame's file; those that stay put: one file beside the frames
+  // (sim/run.cpp).
+  const std::string obstacles =
+      f.obstacles.empty() ? dir + "/obstacles.vtu" : dir + "/" + f.obstacles;
   if (fs::exists(obstacles))
     for (render::TriangleMesh& m : render::obstacle_meshes(io::read_vtu(obstacles)))
       out.frame.meshes.push_back(std::move(m));

@@ -118,7 +118,8 @@ class LiveScene {
       f.meshes = render::body_meshes(frames_->surface(body_snap_));
     }
     if (!sim_->obstacles().empty())
-      for (render::TriangleMesh& m : render::obstacle_meshes(obstacle_surface(sim_->obstacles())))
+      for (render::TriangleMesh& m :
+           render::obstacle_meshes(obstacle_surface(sim_->obstacles(), sim_->time())))
         f.meshes.push_back(std::move(m));
   }
 

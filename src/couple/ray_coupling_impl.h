@@ -36,7 +36,7 @@ class RayCouplingT final : public RayCoupling {
   RayCouplingT(const RayCouplingSettings& s, BodySolver* bodies, Backend backend)
       : set_(s), bodies_(bodies), coupler_(make_coupler(backend)) {
     const MemSpace sp = Exec::kSpace;
-    for (Buffer<int>* b : {&face_, &tank_face_}) *b = Buffer<int>(sp);
+    for (Buffer<int>* b : {&face_, &tank_face_, &crossing_side_}) *b = Buffer<int>(sp);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       *b = Buffer<Real>(sp);
     for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_, &near_slip_, &near_push_, &bias_})
@@ -71,6 +71,32 @@ class RayCouplingT final : public RayCoupling {
     const BodyArrays a = bodies_->arrays();
     body_bvh_.rebuild(ex_, a.x);
     body_bvh_.refit(ex_, a.x, a.x);
+    exec_sync(ex_);
+  }
+
+  void move_obstacles(const std::vector<Vec3>& x_start, const std::vector<Vec3>& x_end,
+                      double dt) override {
+    const int n = int(x_end.size());
+    if (tank_tris_ == 0 || n == 0 || obstacle_base_ + n != static_nodes_ || !(dt > 0)) return;
+    if (!statics_move_) {
+      tank_x_old_ = Buffer<Vec3>(Exec::kSpace, std::size_t(static_nodes_));
+      static_vel_ = Buffer<Vec3>(Exec::kSpace, std::size_t(static_nodes_));
+      copy(tank_x_old_.data(), tank_x_.data(), static_nodes_);  // the tank's corners
+      exec_sync(ex_);
+      statics_move_ = true;
+    }
+    tank_x_old_.upload(x_start.data(), x_start.size(), std::size_t(obstacle_base_));
+    tank_x_.upload(x_end.data(), x_end.size(), std::size_t(obstacle_base_));
+    const Vec3 *x0 = tank_x_old_.data(), *x1 = tank_x_.data();
+    Vec3* vel = static_vel_.data();
+    const Real rdt = Real(1) / Real(dt);
+    parallel_for(ex_, static_nodes_, [=] SPHFEM_LAMBDA(int i) { vel[i] = (x1[i] - x0[i]) * rdt; });
+    tank_bvh_.refit(ex_, x0, x1);
+    if (tank_bvh_.quality(ex_) > set_.rebuild_quality) {
+      tank_bvh_.rebuild(ex_, x1);
+      tank_bvh_.refit(ex_, x0, x1);
+      ++stats_.rebuilds;
+    }
     exec_sync(ex_);
   }
 
@@ -178,7 +204,8 @@ class RayCouplingT final : public RayCoupling {
       fill_no_hit(n);
     }
     if (tank_tris_ > 0) {
-      cast_moving(ex_, tank_bvh_, tank_x_.data(), tank_x_.data(), n, f.x, f.v, rdt, skin,
+      const Vec3* from = statics_move_ ? tank_x_old_.data() : tank_x_.data();
+      cast_moving(ex_, tank_bvh_, from, tank_x_.data(), n, f.x, f.v, rdt, skin,
                   SegmentHits{tank_face_.data(), tank_t_.data(), tank_u_.data(), tank_v_.data(),
                               tank_len_.data(), nullptr});
       merge_tank_hits(n);
@@ -186,15 +213,23 @@ class RayCouplingT final : public RayCoupling {
     surfaces_ = surfaces();
     const DriftLimits d = coupler_->travel(hits(), f, surfaces_, skin, dt);
     // The positions before the drift, for the leak check after it.
-    if (body_tris_ > 0) copy(x_pre_.data(), f.x, n);
+    if (body_tris_ > 0 || statics_move_) copy(x_pre_.data(), f.x, n);
     exec_sync(ex_);
     return d;
   }
 
   void fix_contacts(const FluidArrays& f) override {
     if (set_.rays) coupler_->push_out(hits(), f, surfaces_, set_.skin);
+    // Obstacles on a path sweep through the fluid; either side of their faces is a front.
+    if (statics_move_)
+      stats_.crossed += resolve_crossings(f, 4, tank_bvh_, tank_x_old_.data(), tank_x_.data(),
+                                          tank_tri_.data(), /*two_sided=*/true);
     // The baseline only counts.
-    if (body_tris_ > 0) stats_.crossed += resolve_crossings(f, set_.rays ? 4 : 1);
+    if (body_tris_ > 0) {
+      const BodyArrays a = bodies_->arrays();
+      stats_.crossed += resolve_crossings(f, set_.rays ? 4 : 1, body_bvh_, x_old_.data(), a.x,
+                                          a.surface, /*two_sided=*/false);
+    }
   }
 
   void exchange(const FluidArrays& f) override {
@@ -369,7 +404,7 @@ class RayCouplingT final : public RayCoupling {
   }
 
   void grow(int n) {
-    for (Buffer<int>* b : {&face_, &tank_face_}) grow_buffer(*b, n);
+    for (Buffer<int>* b : {&face_, &tank_face_, &crossing_side_}) grow_buffer(*b, n);
     for (Buffer<Real>* b : {&t_, &u_, &v_, &len_, &tank_t_, &tank_u_, &tank_v_, &tank_len_})
       grow_buffer(*b, n);
     for (Buffer<Real>* b : {&near_dist_, &near_u_, &near_v_, &near_slip_, &near_push_, &bias_})
@@ -406,6 +441,7 @@ class RayCouplingT final : public RayCoupling {
       static_coeffs_.push_back(set_.wall);
     }
     const int base = int(c.size()), first = int(tris.size());
+    obstacle_base_ = base;
     c.insert(c.end(), set_.obstacle_x.begin(), set_.obstacle_x.end());
     for (Tri t : set_.obstacle_tris) {
       for (int& v : t.v) v += base;
@@ -475,6 +511,7 @@ class RayCouplingT final : public RayCoupling {
                                         tank_tri_.data(), set_.wall);
       st.tri_offset = static_offset_;
       st.coeffs = static_coeffs_;
+      if (statics_move_) st.v = static_vel_.data();
       s.push_back(st);
     }
     return s;
@@ -484,41 +521,43 @@ class RayCouplingT final : public RayCoupling {
   // point's displacement: a particle stopped by the tank, or carried with one face, can still
   // be crossed by another face moving differently (a cloth edge beside a wall, a concave
   // corner), or by a face that turns within the step. So each particle's actual path over the
-  // step is tested again, exactly, against every body face moving linearly from its old to
-  // its new position (collide::moving_contact). A particle that met a face from in front is
-  // put a skin in front of that face's new position and tested again; one leaving a body from
-  // behind its faces (let in by an inverted element) is let go. The first test is the leak
-  // check; what still meets a face after the last pass is counted in `crossed`. The baseline
-  // (passes = 1) only counts.
-  long resolve_crossings(const FluidArrays& f, int kPasses) {
+  // step is tested again, exactly, against every face of a set (the bodies', or the moving
+  // obstacles') moving linearly from its old to its new position (collide::moving_contact).
+  // A particle that met a face from in front is put a skin in front of that face's new
+  // position and tested again; one leaving a body from behind its faces (let in by an inverted
+  // element) is let go. A two-sided set (open obstacle surfaces) puts the particle back on the
+  // side it came from. The first test is the leak check; what still meets a face after the
+  // last pass is counted in `crossed`. The baseline (passes = 1) only counts.
+  long resolve_crossings(const FluidArrays& f, int kPasses, const SurfaceBvh<Exec>& bvh,
+                         const Vec3* x_old, const Vec3* x_new, const Tri* tris, bool two_sided) {
     const int n = f.n;
     Vec3* x = f.x;
     const Vec3* pre = x_pre_.data();
     const Real skin = set_.skin;
     // Rounding of the contact test; far below the skin the fix keeps.
     const Real tol = collide::rmax(Real(0.01) * skin, Real(1e-7));
-    const BodyArrays a = bodies_->arrays();
     int* face = tank_face_.data();  // the coupler is done with the tank's hit buffers
     Real *tau = tank_t_.data(), *hu = tank_u_.data(), *hv = tank_v_.data();
+    int* side = two_sided ? crossing_side_.data() : nullptr;
     long crossed = 0;
     for (int pass = 0; pass < kPasses; ++pass) {
       const auto t0 = Clock::now();
-      // Front contacts only (entries), so the fix always puts the particle in front.
-      cast_contacts(ex_, body_bvh_, x_old_.data(), a.x, n, pre, x, tol,
-                    ContactHits{face, tau, hu, hv, nullptr}, /*front_only=*/true);
+      // One-sided: front contacts only (entries), so the fix always puts the particle in front.
+      cast_contacts(ex_, bvh, x_old, x_new, n, pre, x, tol, ContactHits{face, tau, hu, hv, side},
+                    /*front_only=*/!two_sided);
       const double c = reduce_sum(
           ex_, n, [=] SPHFEM_LAMBDA(int i) -> double { return face[i] >= 0 ? 1.0 : 0.0; });
       crossed = long(c + 0.5);
       if (pass == 0) stats_.ms_leak_check += ms_since(t0);
       if (crossed == 0 || pass == kPasses - 1) break;
-      const Vec3* nx = a.x;
-      const Tri* tris = a.surface;
+      const Vec3* nx = x_new;
       parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) {
         if (face[i] < 0) return;
         const Tri tr = tris[face[i]];
         const Vec3 p0 = nx[tr.v[0]], p1 = nx[tr.v[1]], p2 = nx[tr.v[2]];
         const Vec3 c = p0 * (Real(1) - hu[i] - hv[i]) + p1 * hu[i] + p2 * hv[i];
-        x[i] = c + couple::face_normal(p0, p1, p2) * skin;
+        const Real away = side && side[i] < 0 ? -skin : skin;
+        x[i] = c + couple::face_normal(p0, p1, p2) * away;
       });
       exec_sync(ex_);
       stats_.corrected += crossed;
@@ -536,6 +575,12 @@ class RayCouplingT final : public RayCoupling {
   std::vector<int> static_offset_;
   std::vector<ContactCoeffs> static_coeffs_;
   Buffer<Vec3> x_old_, tank_x_, x_pre_, rel_;
+  // Obstacles on a path: the static set's vertices at the start of the step and their
+  // velocities over it (move_obstacles); obstacle_base_: the tank's corners before them.
+  Buffer<Vec3> tank_x_old_, static_vel_;
+  bool statics_move_ = false;
+  int obstacle_base_ = 0;
+  Buffer<int> crossing_side_;
   Buffer<Tri> tank_tri_;
   Buffer<int> face_, tank_face_;
   Buffer<Real> t_, u_, v_, len_, tank_t_, tank_u_, tank_v_, tank_len_;

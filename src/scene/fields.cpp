@@ -517,14 +517,37 @@ const ObjectTable& body_table() {
   return t;
 }
 
+const ObjectTable& obstacle_key_table() {
+  static const ObjectTable t =
+      Table<ObstacleKeySpec>(
+          "obstacles[].path[]",
+          "Poses of a moving obstacle by time. Between two keys the translation goes linearly "
+          "and the rotation turns evenly (about one axis when both keys give the same axis, so "
+          "a key may add more than half a turn; otherwise along the shortest turn between the "
+          "two orientations); before the first key the obstacle holds the first pose, after the "
+          "last the last. Fluid and bodies feel the obstacle's velocity.")
+          .number("time", &ObstacleKeySpec::time, "s", kNonNegative, "When the pose is reached.")
+          .constraint("increasing along the path")
+          .vec3("translate", &ObstacleKeySpec::translate, "m",
+                "Displacement from where the obstacle is placed (`min`/`max` or `offset`), "
+                "applied after the rotation.")
+          .vec3("axis", &ObstacleKeySpec::axis, "-", "Axis of the rotation (its direction only).")
+          .constraint("not zero when `angle` is not 0")
+          .number("angle", &ObstacleKeySpec::angle, "deg", Range(),
+                  "Rotation about `axis` through `obstacles[].pivot`, right-handed.")
+          .build();
+  return t;
+}
+
 const ObjectTable& obstacle_table() {
   static const ObjectTable t =
       Table<ObstacleSpec>("obstacles[]",
-                          "Static obstacles: boxes or triangle surfaces (open ones too: a funnel, "
-                          "a slide, a plate) that the fluid and the bodies meet, with no FEM "
-                          "solve. The fluid meets them through the ray-traced coupling's rays "
-                          "(as static faces of infinite mass, like the tank's with `tank_rays`); "
-                          "body nodes stop on them with `fem.friction`.")
+                          "Obstacles: boxes or triangle surfaces (open ones too: a funnel, a "
+                          "slide, a plate) that the fluid and the bodies meet, with no FEM solve; "
+                          "they stay put or follow a prescribed `path`. The fluid meets them "
+                          "through the ray-traced coupling's rays (as faces of infinite mass, "
+                          "like the tank's with `tank_rays`); body nodes stop on them with "
+                          "`fem.friction`.")
           .string("name", &ObstacleSpec::name,
                   "Name in logs; empty names become `obstacle<i>`, i being the position in the "
                   "list.")
@@ -543,6 +566,11 @@ const ObjectTable& obstacle_table() {
           .number("restitution", &ObstacleSpec::restitution, "-", kUnit,
                   "Fluid contact (ray-traced coupling), as `bodies[].restitution`.")
           .number("slip", &ObstacleSpec::slip, "-", kUnit, "Fluid contact, as `bodies[].slip`.")
+          .array("path", &ObstacleSpec::path, obstacle_key_table(),
+                 "A prescribed rigid motion (a paddle, a tool, a lift); empty: the obstacle "
+                 "stays put. See `obstacles[].path[]`.")
+          .constraint("the obstacle inside the domain all along the path")
+          .vec3("pivot", &ObstacleSpec::pivot, "m", "The point the path's rotations turn about.")
           .finish([](ObstacleSpec& o, std::size_t index) {
             if (o.name.empty()) o.name = "obstacle" + std::to_string(index);
           })
@@ -639,7 +667,7 @@ const ObjectTable& scene_table() {
                   "Fluid material and sources; see `fluid`.")
           .array("bodies", &SceneSpec::bodies, body_table(), "Deformable bodies; see `bodies[]`.")
           .array("obstacles", &SceneSpec::obstacles, obstacle_table(),
-                 "Static obstacles; see `obstacles[]`.")
+                 "Obstacles, fixed or moving; see `obstacles[]`.")
           .object("fem", &SceneSpec::fem, fem_table(), "Solver settings of the bodies; see `fem`.")
           .object("coupling", &SceneSpec::coupling, coupling_table(),
                   "Fluid-body momentum exchange; see `coupling`.")

@@ -78,9 +78,9 @@ io::PointSet BodyFrames::tets(const BodySnapshot& s) const {
   return ps;
 }
 
-io::PointSet obstacle_surface(const ObstaclesModel& m) {
+io::PointSet obstacle_surface(const ObstaclesModel& m, double t) {
   io::PointSet ps;
-  for (const Vec3& p : m.x)
+  for (const Vec3& p : m.at(t))
     ps.positions.insert(ps.positions.end(), {float(p.x), float(p.y), float(p.z)});
   io::DataArray which;
   which.name = "obstacle";

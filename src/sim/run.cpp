@@ -204,15 +204,19 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
       opt.resume ? io::GaugeWriter(io::gauges_path(opt.out_dir), gauge_columns(scene),
                                    std::size_t(rc.next_frame))
                  : io::GaugeWriter(io::gauges_path(opt.out_dir), gauge_columns(scene));
-  std::unique_ptr<io::PvdCollection> pvd, bodies_pvd, tets_pvd;
+  std::unique_ptr<io::PvdCollection> pvd, bodies_pvd, tets_pvd, obstacles_pvd;
   if (scene.output.vtu && solver)
     pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/fluid.pvd");
   if (scene.output.vtu && fem) {
     bodies_pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/bodies.pvd");
     tets_pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/bodies_tets.pvd");
   }
-  // The obstacles do not move: one file for the whole run, beside the collections.
-  if (scene.output.vtu && !sim.obstacles().empty())
+  // Obstacles that stay put: one file for the whole run, beside the collections; on a path, a
+  // file per frame.
+  const bool obstacles_move = scene.output.vtu && sim.obstacles().moving();
+  if (obstacles_move)
+    obstacles_pvd = std::make_unique<io::PvdCollection>(opt.out_dir + "/obstacles.pvd");
+  else if (scene.output.vtu && !sim.obstacles().empty())
     io::write_vtu(opt.out_dir + "/obstacles.vtu", obstacle_surface(sim.obstacles()));
   auto frame_file = [](const char* kind, int frame, const char* ext) {
     char name[64];
@@ -231,6 +235,7 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
     restore(pvd.get(), "fluid");
     restore(bodies_pvd.get(), "bodies");
     restore(tets_pvd.get(), "bodies_tets");
+    restore(obstacles_pvd.get(), "obstacles");
   }
 
   // What a reader of the folder needs besides the frames (the renderer: radius and tank).
@@ -344,6 +349,11 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
       std::snprintf(name, sizeof name, "bodies_tets_%06d.vtu", frame);
       io::write_vtu(frames_dir + "/" + name, body_frames->tets(body_snap));
       tets_pvd->add(t, std::string("frames/") + name);
+    }
+    if (obstacles_pvd) {
+      std::snprintf(name, sizeof name, "obstacles_%06d.vtu", frame);
+      io::write_vtu(frames_dir + "/" + name, obstacle_surface(sim.obstacles(), t));
+      obstacles_pvd->add(t, std::string("frames/") + name);
     }
     const StepProfile& prof = sim.profile();
     const BodyProfile fprof = fem ? fem->profile() : BodyProfile();

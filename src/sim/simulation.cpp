@@ -31,7 +31,7 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
   const bool rays = scene.coupling.method == CouplingMethod::RayTraced;
   if (fluid_ && (bodies_ || (rays && (scene.coupling.tank_rays || !obstacles_.empty())))) {
     RayCouplingSettings cs = ray_coupling_settings(scene);
-    cs.obstacle_x = obstacles_.x;
+    cs.obstacle_x = obstacles_.at(0);
     cs.obstacle_tris = obstacles_.tris;
     cs.obstacle_offset = obstacles_.tri_offset;
     cs.obstacle_coeffs = obstacles_.coeffs;
@@ -52,9 +52,25 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
     contact_ = std::make_unique<SurfaceContact>(bodies_model_, cs);
   }
   if (bodies_ && !obstacles_.empty()) {
-    obstacle_check_ = make_collider(Backend::Cpu);
-    obstacle_check_->build(obstacles_.x, obstacles_.tris);
-    obstacle_check_->refit(obstacles_.x, obstacles_.x);
+    ObstacleGroup still;
+    for (int k = 0; k < obstacles_.count(); ++k) {
+      const auto first = obstacles_.tris.begin() + obstacles_.tri_offset[std::size_t(k)];
+      const auto last = obstacles_.tris.begin() + obstacles_.tri_offset[std::size_t(k) + 1];
+      if (!obstacles_.moves(k)) {
+        still.tris.insert(still.tris.end(), first, last);
+        continue;
+      }
+      ObstacleGroup g;
+      g.obstacle = k;
+      g.tris.assign(first, last);
+      obstacle_groups_.push_back(std::move(g));
+    }
+    if (!still.tris.empty()) obstacle_groups_.insert(obstacle_groups_.begin(), std::move(still));
+    for (ObstacleGroup& g : obstacle_groups_) {
+      g.collider = make_collider(Backend::Cpu);
+      g.collider->build(obstacles_.x, g.tris);
+      g.collider->refit(obstacles_.x, obstacles_.x);
+    }
   }
 }
 
@@ -95,10 +111,11 @@ long carve_bodies(FluidModel& fluid, const BodiesModel& bodies) {
 
 long carve_obstacles(FluidModel& fluid, const ObstaclesModel& obstacles) {
   long removed = 0;
+  const std::vector<Vec3> x = obstacles.at(0);
   for (std::size_t k = 0; k + 1 < obstacles.tri_offset.size(); ++k) {
     const std::vector<Tri> tris(obstacles.tris.begin() + obstacles.tri_offset[k],
                                 obstacles.tris.begin() + obstacles.tri_offset[k + 1]);
-    removed += carve(fluid, obstacles.x, tris, obstacles.closed[k] != 0);
+    removed += carve(fluid, x, tris, obstacles.closed[k] != 0);
   }
   return removed;
 }
@@ -125,6 +142,7 @@ StepInfo Simulation::step(double dt_limit) {
   ++profile_.steps;
   if (!fluid_) {  // bodies alone, in steps of dt_limit
     info.dt = dt_limit;
+    t_step_ = t_bodies_;
     step_bodies(dt_limit);
     t_bodies_ += dt_limit;
     return info;
@@ -136,6 +154,7 @@ StepInfo Simulation::step(double dt_limit) {
   if (c) timed(Stage::Proximity, [&] { near = c->proximity(f.arrays()); });
   timed(Stage::Density, [&] { f.density(near); });
   const double dt = f.time_step(dt_limit, info);
+  t_step_ = f.time();
   timed(Stage::Divergence, [&] { f.divergence(info); });
   timed(Stage::Forces, [&] { f.forces(info); });
   timed(Stage::Pressure, [&] {
@@ -144,7 +163,12 @@ StepInfo Simulation::step(double dt_limit) {
   });
   if (bodies_) step_bodies(dt);
   DriftLimits limits;
-  if (c) timed(Stage::Collide, [&] { limits = c->cast(f.arrays(), dt); });
+  if (c)
+    timed(Stage::Collide, [&] {
+      if (obstacles_.moving())
+        c->move_obstacles(obstacles_.at(t_step_), obstacles_.at(t_step_ + dt), dt);
+      limits = c->cast(f.arrays(), dt);
+    });
   timed(Stage::Drift, [&] { f.drift(limits, info); });
   if (c) {
     timed(Stage::ContactFix, [&] { c->fix_contacts(f.arrays()); });
@@ -162,7 +186,7 @@ StepInfo Simulation::step(double dt_limit) {
 // once more after it.
 void Simulation::step_bodies(double dt) {
   std::vector<Vec3> before;
-  const bool contacts = obstacle_check_ || contact_;
+  const bool contacts = !obstacle_groups_.empty() || contact_;
   BodyStepInfo b;
   auto implicit_step = [&] {
     try {
@@ -192,7 +216,7 @@ void Simulation::step_bodies(double dt) {
     auto resolve = [&] {
       bodies_->snapshot(s);
       moved.assign(s.x.size(), 0);
-      if (obstacle_check_) collide_obstacles(before, s.x, s.v, moved);
+      if (!obstacle_groups_.empty()) collide_obstacles(before, s.x, s.v, moved, t_step_, dt);
       if (!contact_) return;
       std::vector<std::uint8_t> pushed;
       last_contact_ = contact_->resolve(before, s.x, s.v, dt, pushed);
@@ -239,41 +263,74 @@ BodyContactTally Simulation::take_body_contact_tally() {
 }
 
 // Nodes whose path over the step met an obstacle's face go back to the side they came from, a
-// small gap off the face; the velocity into the face is removed and the tangential one loses
-// fem.friction times the removed normal speed (Coulomb, as on the tank's walls). Done on the
-// host after the step: a projection, like the walls', not a constraint inside the solve.
+// small gap off the face; the velocity into the face (relative to the face's own) is removed
+// and the tangential one loses fem.friction times the removed normal speed (Coulomb, as on the
+// tank's walls). Done on the host after the step: a projection, like the walls', not a
+// constraint inside the solve. An obstacle on a path is met in its own frame: each node's path
+// relative to it, from where the node was in the obstacle's start pose to where it is in the
+// end pose, as a ray against its faces as placed.
 void Simulation::collide_obstacles(const std::vector<Vec3>& before, std::vector<Vec3>& xs,
-                                   std::vector<Vec3>& vs, std::vector<std::uint8_t>& moved) {
+                                   std::vector<Vec3>& vs, std::vector<std::uint8_t>& moved,
+                                   double t0, double dt) {
   const Real gap = Real(1e-5 * norm(scene_.domain.hi - scene_.domain.lo));
-  // Each node's path over the step as a ray from where it was (the obstacles do not move).
-  std::vector<Vec3> dir(xs.size());
-  std::vector<Real> len(xs.size());
-  for (std::size_t i = 0; i < xs.size(); ++i) {
-    const Vec3 d = xs[i] - before[i];
-    len[i] = norm(d);
-    dir[i] = len[i] > Real(0) ? d / len[i] : Vec3(0, 1, 0);
+  const std::size_t n = xs.size();
+  struct Hit {
+    int group = -1, face = -1;
+    Real fraction = 2, t = 0;  // of the relative path; distance along it
+  };
+  std::vector<Hit> best(n);
+  std::vector<RigidPose> start(obstacle_groups_.size()), end(obstacle_groups_.size());
+  std::vector<Vec3> from(n), dir(n);
+  std::vector<Real> len(n);
+  for (std::size_t g = 0; g < obstacle_groups_.size(); ++g) {
+    const ObstacleGroup& group = obstacle_groups_[g];
+    if (group.obstacle >= 0) {
+      start[g] = obstacles_.pose(group.obstacle, t0);
+      end[g] = obstacles_.pose(group.obstacle, t0 + dt);
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      from[i] = start[g].inverse(before[i]);
+      const Vec3 d = end[g].inverse(xs[i]) - from[i];
+      len[i] = norm(d);
+      dir[i] = len[i] > Real(0) ? d / len[i] : Vec3(0, 1, 0);
+    }
+    const std::vector<collide::RayHit> hit = group.collider->cast_rays(from, dir, len);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (hit[i].face < 0 || !(len[i] > Real(0))) continue;
+      const Real fraction = hit[i].t / len[i];
+      if (fraction < best[i].fraction) best[i] = Hit{int(g), hit[i].face, fraction, hit[i].t};
+    }
   }
-  const std::vector<collide::RayHit> hit = obstacle_check_->cast_rays(before, dir, len);
   const Real mu = Real(scene_.fem.friction);
-  for (std::size_t i = 0; i < hit.size(); ++i) {
-    if (hit[i].face < 0 || !(len[i] > Real(0))) continue;
-    const Tri& t = obstacles_.tris[std::size_t(hit[i].face)];
+  for (std::size_t i = 0; i < n; ++i) {
+    // A pinned node is held (infinite mass): an obstacle on a path meeting it does not move it.
+    if (best[i].group < 0 || (i < bodies_model_.pinned.size() && bodies_model_.pinned[i])) continue;
+    const std::size_t g = std::size_t(best[i].group);
+    const RigidPose &p0 = start[g], &p1 = end[g];
+    const Tri& t = obstacle_groups_[g].tris[std::size_t(best[i].face)];
     const Vec3 a = obstacles_.x[std::size_t(t.v[0])], b = obstacles_.x[std::size_t(t.v[1])],
                c = obstacles_.x[std::size_t(t.v[2])];
-    Vec3 n = cross(b - a, c - a);
-    n = n / norm(n);
-    if (dot(before[i] - a, n) < Real(0)) n = -n;  // toward the side the node came from
-    const Vec3 p = before[i] + dir[i] * hit[i].t;
-    Vec3 vi = vs[i];
-    const Real vn = dot(vi, n);
+    // In the obstacle's frame: the contact point, and the normal toward the node's side.
+    const Vec3 local = p0.inverse(before[i]);
+    const Vec3 d = p1.inverse(xs[i]) - local;
+    const Vec3 q = local + d / norm(d) * best[i].t;
+    Vec3 nl = cross(b - a, c - a);
+    nl = nl / norm(nl);
+    if (dot(local - a, nl) < Real(0)) nl = -nl;
+    const Vec3 p = p1.apply(q);
+    const Vec3 nrm = p1.identity ? nl : Vec3(p1.rotate(Vec3d(nl)));
+    // The face's velocity at the contact point over the step (zero for one that stays put).
+    const Vec3 w = (p - p0.apply(q)) / Real(dt);
+    Vec3 vr = vs[i] - w;
+    const Real vn = dot(vr, nrm);
     if (vn < Real(0)) {
-      const Vec3 vt = vi - n * vn;
+      const Vec3 vt = vr - nrm * vn;
       const Real st = norm(vt);
       const Real keep = st > -mu * vn ? Real(1) + mu * vn / st : Real(0);
-      vi = vt * keep;
+      vr = vt * keep;
     }
-    xs[i] = p + n * gap;
-    vs[i] = vi;
+    xs[i] = p + nrm * gap;
+    vs[i] = w + vr;
     moved[i] = 1;
   }
 }

@@ -46,8 +46,8 @@ struct RayCouplingSettings {
   bool open_top = false;  // no lid among the tank's faces
   ContactCoeffs wall;
   std::vector<ContactCoeffs> body;  // one per body of the BodySolver's model
-  // Static obstacles, ray-cast with the tank's faces (rays on): their vertices, triangles,
-  // each obstacle's range of triangles and its coefficients.
+  // Obstacles, ray-cast with the tank's faces (rays on): their vertices (where they start),
+  // triangles, each obstacle's range of triangles and its coefficients.
   std::vector<Vec3> obstacle_x;
   std::vector<Tri> obstacle_tris;
   std::vector<int> obstacle_offset;
@@ -89,6 +89,12 @@ class RayCoupling : public SurfaceQuery {
   // The bodies were moved outside a step (a state was loaded): the BVH is built again over
   // where they are now.
   virtual void bodies_moved() = 0;
+  // Before cast(): the obstacles' vertices (RayCouplingSettings::obstacle_x order) at the
+  // start and the end of this step, dt apart, for obstacles on a path. From then on their
+  // faces move linearly over each step, at that velocity, in the rays, the exchange and the
+  // exact crossing test. Without tank faces or obstacles in the ray cast it does nothing.
+  virtual void move_obstacles(const std::vector<Vec3>& x_start, const std::vector<Vec3>& x_end,
+                              double dt) = 0;
 
   virtual const RayCouplingStats& stats() const = 0;
   virtual void reset_stats() = 0;

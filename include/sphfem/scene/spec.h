@@ -117,8 +117,17 @@ struct BodySpec {
 
 enum class ObstacleShape { Box, Mesh };
 
-// A static obstacle: a box or a triangle surface (open ones too: a funnel, a slide, a plate)
-// that the fluid and the bodies meet, without an FEM solve.
+// One pose on an obstacle's path: at `time` the obstacle, as placed, is turned by `angle`
+// about `axis` through its `pivot` and then moved by `translate`.
+struct ObstacleKeySpec {
+  double time = 0;      // s
+  Vec3d translate;      // m
+  Vec3d axis{0, 1, 0};  // direction only
+  double angle = 0;     // degrees, right-handed about axis
+};
+
+// An obstacle: a box or a triangle surface (open ones too: a funnel, a slide, a plate) that the
+// fluid and the bodies meet, without an FEM solve; it stays put or moves along a given path.
 struct ObstacleSpec {
   std::string name;
   ObstacleShape shape = ObstacleShape::Box;
@@ -128,6 +137,10 @@ struct ObstacleSpec {
   Vec3d offset;                          // m, mesh
   double restitution = 0.0;              // fluid contact, as a body's
   double slip = 1.0;
+  // A prescribed rigid motion: poses by time, interpolated between keys and held before the
+  // first and after the last. Empty: the obstacle stays where it is placed.
+  std::vector<ObstacleKeySpec> path;
+  Vec3d pivot;  // m, the point the path's rotations turn about
 };
 
 // Settings of the FEM solve shared by all bodies; defaults are the solver's own.

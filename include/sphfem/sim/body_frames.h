@@ -33,7 +33,8 @@ class BodyFrames {
   io::PointSet surface_cells_, tet_cells_;  // connectivity, offsets, types and cell data
 };
 
-// The obstacles' triangles (static), with cell data "obstacle": each triangle's obstacle.
-io::PointSet obstacle_surface(const ObstaclesModel& obstacles);
+// The obstacles' triangles where they are at time t, with cell data "obstacle": each
+// triangle's obstacle.
+io::PointSet obstacle_surface(const ObstaclesModel& obstacles, double t = 0);
 
 }  // namespace sphfem

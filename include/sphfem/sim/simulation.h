@@ -99,7 +99,16 @@ class Simulation {
   void timed(Stage s, F&& fn);
   void step_bodies(double dt);
   void collide_obstacles(const std::vector<Vec3>& before, std::vector<Vec3>& x,
-                         std::vector<Vec3>& v, std::vector<std::uint8_t>& moved);
+                         std::vector<Vec3>& v, std::vector<std::uint8_t>& moved, double t0,
+                         double dt);
+
+  // Body nodes against the obstacles: the ones that stay put together, in the scene's frame,
+  // and each one on a path alone, in its own frame as placed (obstacle >= 0).
+  struct ObstacleGroup {
+    int obstacle = -1;
+    std::vector<Tri> tris;
+    std::unique_ptr<Collider> collider;
+  };
 
   SceneSpec scene_;
   FluidModel fluid_model_;
@@ -109,14 +118,15 @@ class Simulation {
   std::unique_ptr<RayCoupling> coupling_;
   std::unique_ptr<Collider> inside_check_;
   ObstaclesModel obstacles_;
-  std::unique_ptr<Collider> obstacle_check_;  // body nodes against the obstacles
-  std::unique_ptr<SurfaceContact> contact_;   // body surfaces against each other
+  std::vector<ObstacleGroup> obstacle_groups_;
+  std::unique_ptr<SurfaceContact> contact_;  // body surfaces against each other
   ContactStats last_contact_;
   BodyState step_start_;  // the bodies at the start of the step, for its contact pass
   BodyContactTally tally_;
   static constexpr int kContactPasses = 3;  // implicit steps again with the contact's impulses
   StepProfile profile_;
   double t_bodies_ = 0;  // without fluid
+  double t_step_ = 0;    // when the step being taken began
   long carved_ = 0;
 };
 
