@@ -2,9 +2,11 @@
 // its hole and never crosses its wall (each particle's path over every step checked against
 // the funnel's triangles, an independent count); a soft ball dropped on a tilted plate mesh
 // never passes through it; a box obstacle stops the fluid as a wall does; bad obstacles are
-// refused with the file, the field and the fix.
+// refused with the file, the field and the fix; water at rest against a box has the density
+// of the water away from it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -148,6 +150,56 @@ TEST(SimObstacles, SoftBallOnASlideNeverPassesThrough) {
               x1 - x0);
   EXPECT_GE(worst, -1e-6) << "a node passed through the slide";
   EXPECT_GT(x1 - x0, 0.01) << "the ball should move down the slope";
+}
+
+// Water at rest around a box standing in it: the particles against the box's faces have the
+// density of those away from it (the near-surface density sees closed obstacles), and the
+// water settles.
+TEST(SimObstacles, WaterAtRestAgainstABoxHasItsRestDensity) {
+  const fs::path dir = temp_dir("rest");
+  const nlohmann::json j = nlohmann::json::parse(R"({
+    "simulation": {"solver": "dfsph", "dt_max": 0.002},
+    "fluid": {"particle_radius": 0.005, "viscosity": 1e-5,
+              "blocks": [{"min": [0, 0, 0], "max": [0.2, 0.1, 0.2]}]},
+    "domain": {"min": [0, 0, 0], "max": [0.2, 0.2, 0.2]},
+    "obstacles": [{"name": "post", "shape": "box", "min": [0.07, 0, 0.07],
+                   "max": [0.13, 0.15, 0.13]}]
+  })");
+  const SceneSpec scene = load(j, dir / "scene.json");
+  Simulation sim(scene, Backend::Cpu);
+  while (sim.time() < 0.6 - 1e-9) sim.step(0.6 - sim.time());
+  FluidSnapshot f;
+  sim.snapshot(f);
+  const double rho0 = scene.fluid.rest_density;
+  double near_sum = 0, far_sum = 0, v_max = 0;
+  long near_n = 0, far_n = 0;
+  for (int i = 0; i < f.n; ++i) {
+    const Vec3& p = f.x[i];
+    v_max = std::max(v_max, double(norm(f.v[i])));
+    if (p.y < 0.02 || p.y > 0.07) continue;  // away from the floor and the free surface
+    // Distance outside the post's square, and from the tank's walls.
+    const double dx = std::max({0.07 - double(p.x), double(p.x) - 0.13, 0.0});
+    const double dz = std::max({0.07 - double(p.z), double(p.z) - 0.13, 0.0});
+    const double d = std::sqrt(dx * dx + dz * dz);
+    const double wall = std::min({double(p.x), 0.2 - double(p.x), double(p.z), 0.2 - double(p.z)});
+    if (wall < 0.02) continue;
+    if (d < 0.01) {
+      near_sum += double(f.rho[std::size_t(i)]);
+      ++near_n;
+    } else if (d > 0.02) {
+      far_sum += double(f.rho[std::size_t(i)]);
+      ++far_n;
+    }
+  }
+  ASSERT_GT(near_n, 20);
+  ASSERT_GT(far_n, 20);
+  const double near = near_sum / near_n / rho0, far = far_sum / far_n / rho0;
+  std::printf(
+      "density against the post %.4f rho0 (%ld particles), away from it %.4f (%ld); "
+      "fastest particle %.3g m/s\n",
+      near, near_n, far, far_n, v_max);
+  EXPECT_NEAR(near, far, 0.002);
+  EXPECT_LT(v_max, 0.3) << "the water should settle, not blow up";
 }
 
 TEST(SimObstacles, BadObstaclesAreRefusedWithFileFieldAndFix) {

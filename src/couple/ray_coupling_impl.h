@@ -91,11 +91,14 @@ class RayCouplingT final : public RayCoupling {
     Vec3* vel = static_vel_.data();
     const Real rdt = Real(1) / Real(dt);
     parallel_for(ex_, static_nodes_, [=] SPHFEM_LAMBDA(int i) { vel[i] = (x1[i] - x0[i]) * rdt; });
-    tank_bvh_.refit(ex_, x0, x1);
-    if (tank_bvh_.quality(ex_) > set_.rebuild_quality) {
-      tank_bvh_.rebuild(ex_, x1);
-      tank_bvh_.refit(ex_, x0, x1);
-      ++stats_.rebuilds;
+    for (SurfaceBvh<Exec>* b : {&tank_bvh_, &solid_bvh_}) {
+      if (b == &solid_bvh_ && solid_tris_ == 0) continue;
+      b->refit(ex_, x0, x1);
+      if (b->quality(ex_) > set_.rebuild_quality) {
+        b->rebuild(ex_, x1);
+        b->refit(ex_, x0, x1);
+        ++stats_.rebuilds;
+      }
     }
     exec_sync(ex_);
   }
@@ -124,9 +127,39 @@ class RayCouplingT final : public RayCoupling {
   SurfaceProximity proximity(const FluidArrays& f) override {
     SurfaceProximity p;
     near_n_active_ = 0;
-    if (!set_.near_surface || body_tris_ == 0 || f.n == 0) return p;
+    if (!set_.near_surface || (body_tris_ == 0 && solid_tris_ == 0) || f.n == 0) return p;
     const int n = f.n;
     grow(n);
+    if (body_tris_ > 0) {
+      body_proximity(f);
+    } else {
+      int* face = near_face_.data();
+      Real* slip = near_slip_.data();
+      Vec3 *nrm = near_n_.data(), *dv = near_dv_.data();
+      parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) {
+        face[i] = -1;
+        slip[i] = Real(1);
+        nrm[i] = Vec3();
+        dv[i] = Vec3();
+      });
+    }
+    if (solid_tris_ > 0) solid_proximity(f);
+    exec_sync(ex_);
+    near_n_active_ = n;
+    near_n_step_ = n;
+    p.dist = near_dist_.data();
+    p.normal = near_n_.data();
+    p.velocity = near_vel_.data();
+    p.dv = near_dv_.data();
+    p.slip = near_slip_.data();
+    return p;
+  }
+
+  // Public only because nvcc does not allow device lambdas in private member functions.
+
+  // Each particle's closest body face within the support (near_face_, -1: none).
+  void body_proximity(const FluidArrays& f) {
+    const int n = f.n;
     // No refit: the build, and each step's refit over x_old -> x, already bound the bodies
     // where they are now (they move only in the fem stage).
     const BodyArrays a = bodies_->arrays();
@@ -164,19 +197,50 @@ class RayCouplingT final : public RayCoupling {
       }
       vel[i] = nv[t.v[0]] * w0 + nv[t.v[1]] * u[i] + nv[t.v[2]] * v[i];
     });
-    exec_sync(ex_);
-    near_n_active_ = n;
-    near_n_step_ = n;
-    p.dist = dist;
-    p.normal = nrm;
-    p.velocity = vel;
-    p.dv = dv;
-    p.slip = slip;
-    return p;
+  }
+
+  // The closed obstacles bound solids as bodies do: a particle whose closest surface within
+  // the support is one of theirs (nearer than any body's) gets it for the near-surface
+  // density, with near_face_ = -1, so that its pressure goes to no node (infinite mass).
+  void solid_proximity(const FluidArrays& f) {
+    const int n = f.n;
+    int *sface = solid_face_.data(), *sside = solid_side_.data();
+    Real *sdist = solid_dist_.data(), *su = solid_u_.data(), *sv = solid_v_.data();
+    Vec3* spoint = solid_point_.data();
+    const Vec3* sx = tank_x_.data();
+    closest_points(ex_, solid_bvh_, sx, n, f.x, set_.support,
+                   ClosestHits{sface, sdist, spoint, sside, su, sv});
+    int* face = near_face_.data();
+    Real *dist = near_dist_.data(), *slip = near_slip_.data();
+    Vec3 *nrm = near_n_.data(), *vel = near_vel_.data(), *dv = near_dv_.data();
+    const Vec3* px = f.x;
+    const Tri* tris = solid_tri_.data();
+    const Real* face_slip = solid_slip_.data();
+    const Vec3* sxv = statics_move_ ? static_vel_.data() : nullptr;
+    const Real tiny = Real(1e-6) * set_.support;
+    parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) {
+      if (sface[i] < 0 || (face[i] >= 0 && dist[i] <= sdist[i])) return;
+      const Tri t = tris[sface[i]];
+      face[i] = -1;
+      dv[i] = Vec3();
+      slip[i] = face_slip[sface[i]];
+      const Vec3 d = px[i] - spoint[i];
+      const Real l = norm(d);
+      if (sside[i] > 0 && l > tiny) {
+        nrm[i] = d / l;
+        dist[i] = sdist[i];
+      } else {
+        nrm[i] = couple::face_normal(sx[t.v[0]], sx[t.v[1]], sx[t.v[2]]);
+        dist[i] = Real(0);
+      }
+      const Real w0 = Real(1) - su[i] - sv[i];
+      vel[i] = sxv ? sxv[t.v[0]] * w0 + sxv[t.v[1]] * su[i] + sxv[t.v[2]] * sv[i] : Vec3();
+    });
   }
 
   void before_bodies(const FluidArrays& f) override {
     ++stats_.steps;
+    if (body_tris_ == 0) near_n_active_ = 0;  // the solids' pressure goes to no node
     push_in_exchange_ = near_n_active_ > 0 && set_.rays && implicit_exchange_usable();
     if (near_n_active_ > 0) return_surface_pressure(f);
     near_n_active_ = 0;
@@ -254,8 +318,6 @@ class RayCouplingT final : public RayCoupling {
         stats_.body_impulse[b] += cs.body_impulse[b];
   }
 
-  // Public only because nvcc does not allow device lambdas in private member functions.
-
   // Near-surface density: a particle its ray did not stop that ends the step within a
   // particle radius in front of its closest face (at the face's new position) joins the
   // exchange as a contact of that face. The fluid's pressure saw the face at its old velocity;
@@ -314,6 +376,7 @@ class RayCouplingT final : public RayCoupling {
   // near-surface pressure's change (near_dv_), push_i n_i its normal push kept for the
   // exchange (near_push_, never negative).
   void return_near_impulse(const FluidArrays& f, Real a_dv, Real a_push) {
+    if (body_tris_ == 0) return;
     const BodyArrays a = bodies_->arrays();
     const int* face = near_face_.data();
     const Real *u = near_u_.data(), *v = near_v_.data(), *push = near_push_.data();
@@ -411,6 +474,11 @@ class RayCouplingT final : public RayCoupling {
       grow_buffer(*b, n);
     grow_buffer(near_face_, n);
     for (Buffer<Vec3>* b : {&x_pre_, &rel_, &near_n_, &near_vel_, &near_dv_}) grow_buffer(*b, n);
+    if (solid_tris_ > 0) {
+      for (Buffer<int>* b : {&solid_face_, &solid_side_}) grow_buffer(*b, n);
+      for (Buffer<Real>* b : {&solid_dist_, &solid_u_, &solid_v_}) grow_buffer(*b, n);
+      grow_buffer(solid_point_, n);
+    }
   }
 
   void copy(Vec3* dst, const Vec3* src, int n) {
@@ -459,6 +527,27 @@ class RayCouplingT final : public RayCoupling {
     tank_tris_ = int(tris.size());
     tank_bvh_.build(ex_, tank_x_.data(), tank_tri_.data(), tank_tris_);
     tank_bvh_.refit(ex_, tank_x_.data(), tank_x_.data());
+    // The closed obstacles' faces, for the near-surface density.
+    std::vector<Tri> solid;
+    std::vector<Real> slip;
+    for (std::size_t k = 0; set_.near_surface && k + 1 < set_.obstacle_offset.size(); ++k) {
+      if (k >= set_.obstacle_closed.size() || !set_.obstacle_closed[k]) continue;
+      for (int t = set_.obstacle_offset[k]; t < set_.obstacle_offset[k + 1]; ++t) {
+        solid.push_back(tris[std::size_t(first + t)]);
+        slip.push_back(set_.obstacle_coeffs[k].slip);
+      }
+    }
+    solid_tris_ = int(solid.size());
+    if (solid_tris_ == 0) return;
+    solid_tri_ = Buffer<Tri>(Exec::kSpace, solid.size());
+    solid_tri_.upload(solid.data(), solid.size());
+    solid_slip_ = Buffer<Real>(Exec::kSpace, slip.size());
+    solid_slip_.upload(slip.data(), slip.size());
+    solid_bvh_.build(ex_, tank_x_.data(), solid_tri_.data(), solid_tris_);
+    solid_bvh_.refit(ex_, tank_x_.data(), tank_x_.data());
+    for (Buffer<int>* b : {&solid_face_, &solid_side_}) *b = Buffer<int>(Exec::kSpace);
+    for (Buffer<Real>* b : {&solid_dist_, &solid_u_, &solid_v_}) *b = Buffer<Real>(Exec::kSpace);
+    solid_point_ = Buffer<Vec3>(Exec::kSpace);
   }
 
   void fill_no_hit(int n) {
@@ -581,6 +670,15 @@ class RayCouplingT final : public RayCoupling {
   bool statics_move_ = false;
   int obstacle_base_ = 0;
   Buffer<int> crossing_side_;
+  // The closed obstacles' faces (indices into tank_x_), for the near-surface density, and
+  // each particle's closest one.
+  SurfaceBvh<Exec> solid_bvh_;
+  int solid_tris_ = 0;
+  Buffer<Tri> solid_tri_;
+  Buffer<Real> solid_slip_;
+  Buffer<int> solid_face_, solid_side_;
+  Buffer<Real> solid_dist_, solid_u_, solid_v_;
+  Buffer<Vec3> solid_point_;
   Buffer<Tri> tank_tri_;
   Buffer<int> face_, tank_face_;
   Buffer<Real> t_, u_, v_, len_, tank_t_, tank_u_, tank_v_, tank_len_;

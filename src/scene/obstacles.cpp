@@ -212,6 +212,16 @@ ObstaclesModel compile_obstacles(const SceneSpec& scene, const std::string& file
            "the fluid meets obstacles through the ray-traced coupling only, and the scene's "
            "coupling.method is boundary_particles",
            "set coupling.method to \"raytraced\", or leave the obstacle out");
+    const bool closed = o.shape == ObstacleShape::Box || closed_surface(s);
+    if (closed) {
+      // Faces outward, as the near-surface density reads them: an inside-out file is turned.
+      double volume = 0;
+      for (const Tri& t : s.tris)
+        volume += dot(s.x[std::size_t(t.v[0])],
+                      cross(s.x[std::size_t(t.v[1])], s.x[std::size_t(t.v[2])]));
+      if (volume < 0)
+        for (Tri& t : s.tris) std::swap(t.v[1], t.v[2]);
+    }
     const int base = int(m.x.size());
     for (const Vec3d& p : s.x) m.x.push_back(Vec3(p));
     for (Tri t : s.tris) {
@@ -223,7 +233,7 @@ ObstaclesModel compile_obstacles(const SceneSpec& scene, const std::string& file
     m.path.push_back(o.path);
     m.pivot.push_back(o.pivot);
     m.coeffs.push_back(ContactCoeffs{Real(o.restitution), Real(o.slip)});
-    m.closed.push_back(o.shape == ObstacleShape::Box || closed_surface(s) ? 1 : 0);
+    m.closed.push_back(closed ? 1 : 0);
   }
   return m;
 }

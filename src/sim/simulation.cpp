@@ -35,7 +35,10 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
     cs.obstacle_tris = obstacles_.tris;
     cs.obstacle_offset = obstacles_.tri_offset;
     cs.obstacle_coeffs = obstacles_.coeffs;
-    cs.near_surface = cs.near_surface && bodies_ != nullptr;
+    cs.obstacle_closed = obstacles_.closed;
+    const bool solids =
+        std::find(obstacles_.closed.begin(), obstacles_.closed.end(), 1) != obstacles_.closed.end();
+    cs.near_surface = cs.near_surface && (bodies_ != nullptr || solids);
     cs.support = fluid_model_.params.h;
     coupling_ = make_ray_coupling(cs, bodies_.get(), backend);
     // The baseline: samples a particle spacing apart on every body surface (Akinci et al.).

@@ -34,7 +34,8 @@ struct RayCouplingSettings {
   bool rays = true;
   // Near-surface density (sph/surface_density.h): each particle's closest body surface point
   // within `support` (the kernel's radius) goes to the fluid, and the pressure it exerts
-  // there returns to the face's nodes.
+  // there returns to the face's nodes. The closed obstacles' faces count as surfaces too (of
+  // infinite mass: nothing returns).
   bool near_surface = false;
   // The joint exchange meets the bodies through their step operator (Coupler::apply's
   // NodeOperator) rather than their lumped node masses.
@@ -52,7 +53,8 @@ struct RayCouplingSettings {
   std::vector<Tri> obstacle_tris;
   std::vector<int> obstacle_offset;
   std::vector<ContactCoeffs> obstacle_coeffs;
-  double rebuild_quality = 2.0;  // rebuild the bodies' BVH above this quality ratio
+  std::vector<std::uint8_t> obstacle_closed;  // per obstacle: bounds a solid, faces outward
+  double rebuild_quality = 2.0;               // rebuild the bodies' BVH above this quality ratio
 };
 
 // Sums since the last reset_stats().

@@ -36,7 +36,8 @@ struct ObstaclesModel {
   std::vector<int> tri_offset;        // obstacle k owns [tri_offset[k], tri_offset[k + 1])
   std::vector<int> x_offset;          // and the vertices [x_offset[k], x_offset[k + 1])
   std::vector<ContactCoeffs> coeffs;  // fluid contact, one per obstacle
-  std::vector<std::uint8_t> closed;   // per obstacle: bounds a solid (box, closed surface)
+  std::vector<std::uint8_t> closed;   // per obstacle: bounds a solid (box, closed surface),
+                                      // its faces turned outward
   std::vector<std::vector<ObstacleKeySpec>> path;  // per obstacle; empty: it stays put
   std::vector<Vec3d> pivot;                        // per obstacle
 
