@@ -630,7 +630,8 @@ const ObjectTable& coupling_table() {
                    "Ray-traced coupling: add the kernel mass missing beyond a body's surface "
                    "(from the distance to the closest point), and its pressure force, so fluid "
                    "next to a body keeps its rest density; the force goes back to the face's "
-                   "nodes.")
+                   "nodes. Closed obstacles (boxes, closed meshes) count as such surfaces too, "
+                   "of infinite mass; open ones do not (fluid may lie on both sides).")
           .boolean("implicit_exchange", &CouplingSpec::implicit_exchange,
                    "Ray-traced coupling: the joint momentum exchange meets each body through "
                    "the operator of its implicit step, (1 + dt alpha) M + dt (dt + beta) K, so "
