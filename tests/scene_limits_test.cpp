@@ -2,8 +2,10 @@
 // that passes a cap or the free memory is refused at once, naming the file, the field and the
 // fix. The counts are checked against the lattices compile_fluid and the shapes really build.
 #include <gtest/gtest.h>
+#include <malloc.h>
 
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -15,6 +17,7 @@
 #include "sphfem/scene/compile.h"
 #include "sphfem/scene/limits.h"
 #include "sphfem/scene/load.h"
+#include "sphfem/sim/simulation.h"
 
 namespace sphfem {
 namespace {
@@ -140,6 +143,35 @@ TEST_F(SceneLimits, CountsMatchWhatIsBuilt) {
   EXPECT_NEAR(z.emitted, emitted, 0.05 * emitted);
   EXPECT_GE(z.emitted, emitted);
   EXPECT_EQ(frame_count(0.7, 30), 22.0);
+}
+
+// The memory estimate (what `check` prints and the limits compare with the free memory) against
+// the heap a simulation really holds after its first steps (glibc's mallinfo2: bytes in use,
+// mapped chunks included): never below it, and within a quarter above it. Fluid alone, with
+// the tank's faces in the rays (the ray coupling's buffers), and with a box obstacle too.
+TEST_F(SceneLimits, MemoryEstimateBoundsWhatARunHolds) {
+  const std::string fluid = R"("simulation": {"solver": "dfsph"},
+      "fluid": {"blocks": [{"min": [0,0,0], "max": [0.3,0.15,0.3]}], "particle_radius": 0.004},
+      "domain": {"min": [0,0,0], "max": [0.3,0.3,0.3]})";
+  const char* extra[] = {R"("coupling": {"tank_rays": false})", R"("coupling": {})",
+                         R"("obstacles": [{"min": [0.1,0,0.1], "max": [0.2,0.25,0.2]}])"};
+  for (const char* e : extra) {
+    const SceneSpec s = load_scene(write("{" + fluid + ", " + e + "}"));
+    const SceneSize z = scene_size(s);
+    malloc_trim(0);
+    const struct mallinfo2 before = mallinfo2();
+    double held = 0;
+    {
+      Simulation sim(s, Backend::Cpu);
+      for (int k = 0; k < 3; ++k) sim.step(0.001);
+      const struct mallinfo2 after = mallinfo2();
+      held = double(after.uordblks + after.hblkhd) - double(before.uordblks + before.hblkhd);
+    }
+    std::printf("%s: estimate %.0f B a particle, held %.0f B a particle (%.0f particles)\n", e,
+                z.bytes() / z.capacity, held / z.capacity, z.capacity);
+    EXPECT_GE(z.bytes(), held) << e;
+    EXPECT_LE(z.bytes(), 1.25 * held) << e;
+  }
 }
 
 TEST_F(SceneLimits, ShapeSizesBoundWhatIsGenerated) {

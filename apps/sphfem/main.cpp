@@ -40,11 +40,19 @@ std::string shape_name(BodyShape shape) {
 int cmd_check(const std::string& path) {
   const SceneSpec s = load_scene(path);
   std::printf("scene       %s%s%s\n", path.c_str(), s.name.empty() ? "" : " — ", s.name.c_str());
-  double bytes = 0;
+  double fluid_b = 0, body_b = 0, particles = 0, tets = 0;
   if (s.has_fluid()) {
     const FluidModel m = compile_fluid(s);
     const double cells = double(m.grid.nx) * double(m.grid.ny) * double(m.grid.nz);
-    bytes += fluid_bytes(m.capacity, double(m.boundary_x.size()), cells);
+    fluid_b = fluid_bytes(m.capacity, double(m.boundary_x.size()), cells);
+    const bool rays = s.coupling.method == CouplingMethod::RayTraced;
+    if (rays && (!s.bodies.empty() || s.coupling.tank_rays || !s.obstacles.empty())) {
+      SceneSize z;
+      z.capacity = m.capacity;
+      z.wall_samples = double(m.boundary_x.size());
+      fluid_b += coupling_bytes(m.capacity, contact_bound(z), !s.obstacles.empty());
+    }
+    particles = m.capacity;
     std::printf("solver      %s, %s kernel, support %.4g m\n",
                 s.simulation.solver == SolverKind::DFSPH ? "DFSPH" : "WCSPH",
                 s.fluid.kernel == KernelKind::CubicSpline ? "cubic spline" : "Wendland C2",
@@ -75,7 +83,8 @@ int cmd_check(const std::string& path) {
           body.name.c_str(), shape_name(s.bodies[i].shape).c_str(), body.rest.size(),
           body.tets.size(), body.surface.size(), mass, pinned);
     }
-    bytes += body_bytes(b.nodes, b.elements, double(b.surface.size()));
+    body_b = body_bytes(b.nodes, b.elements, double(b.surface.size()));
+    tets = b.elements;
   }
   if (!s.obstacles.empty()) {
     const ObstaclesModel ob = compile_obstacles(s, path);
@@ -93,7 +102,10 @@ int cmd_check(const std::string& path) {
   }
   std::printf("time        %.4g s, frames every %.4g s (%.0f frames)\n", s.simulation.duration,
               1.0 / s.output.fps, frame_count(s.simulation.duration, s.output.fps));
-  std::printf("memory      about %.1f MiB\n", bytes / (1024.0 * 1024.0));
+  std::printf("memory      about %.1f MiB", (fluid_b + body_b) / (1024.0 * 1024.0));
+  if (particles > 0) std::printf(", %.0f B a particle (walls included)", fluid_b / particles);
+  if (tets > 0) std::printf(", %.0f B a tetrahedron (nodes included)", body_b / tets);
+  std::printf("\n");
   std::printf("ok\n");
   return 0;
 }

@@ -19,8 +19,12 @@ std::uint32_t exclusive_scan(CpuExec&, const std::uint32_t* in, std::uint32_t* o
 
 void sort_pairs(CpuExec& ex, std::uint32_t* keys, std::uint32_t* vals, int n, int key_bits) {
   if (n <= 1) return;
-  ex.scratch_keys.resize(n);
-  ex.scratch_vals.resize(n);
+  // Growth by a quarter, not the vector's doubling: the scratch lives as long as the run, and
+  // the memory estimate (scene/limits.h) counts it so.
+  for (std::vector<std::uint32_t>* s : {&ex.scratch_keys, &ex.scratch_vals}) {
+    if (s->capacity() < std::size_t(n)) s->reserve(std::size_t(n) + std::size_t(n) / 4);
+    s->resize(std::size_t(n));
+  }
   std::uint32_t* k0 = keys;
   std::uint32_t* v0 = vals;
   std::uint32_t* k1 = ex.scratch_keys.data();

@@ -196,6 +196,9 @@ FluidModel compile_fluid(const SceneSpec& s) {
     throw std::runtime_error("fluid: the scene would need " + std::to_string(cap) +
                              " particles; use larger particles or fewer emitters");
   m.capacity = int(cap);
+  // The model lives as long as the run (twice: the solver keeps a copy); no growth slack.
+  for (std::vector<Vec3>* v : {&m.x0, &m.v0, &m.boundary_x}) v->shrink_to_fit();
+  m.boundary_psi.shrink_to_fit();
   return m;
 }
 

@@ -157,10 +157,14 @@ std::string scene_format_markdown() {
      << "- at most " << scene::kMaxBodyTets
      << " tetrahedra per body: a shape's `resolution`, and a mesh file's `max_volume` (the "
         "surface's volume / `max_volume` is fewer tetrahedra than TetGen makes);\n"
-     << "- and the memory all of it needs (about 324 B per particle, 220 B of it the neighbour "
-        "list, 56 B per wall sample, 8 B per grid cell, 194 B per body node and 196 B per "
-        "tetrahedron) at most the memory free "
-        "on the machine (`MemAvailable`, or a container's `memory.max` when lower).\n\n";
+     << "- and the memory all of it needs at most the memory free on the machine "
+        "(`MemAvailable`, or a container's `memory.max` when lower): about 426 B per particle "
+        "(264 B of it the neighbour list, 48 B the initial state kept), 185 B more per "
+        "particle with the ray coupling's rays (225 B with obstacles) and 220 B per contact "
+        "against the tank's faces, 88 B per wall sample, 8 B per grid cell and 1 MiB of "
+        "tables; 194 B per body node and 196 B per tetrahedron. For fluid with the tank's "
+        "faces in the rays this comes to 1.0-1.25 times what a run holds "
+        "(`tests/scene_limits_test.cpp`).\n\n";
 
   const SceneSpec sample = scene::example_scene();
   std::string example;

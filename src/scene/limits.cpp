@@ -83,14 +83,39 @@ double read_bytes(const char* path) {
 
 }  // namespace
 
+// The small tables a fluid run holds whatever its size (kernel tables, the tank's faces and
+// their trees, per-thread sums).
+constexpr double kFixedBytes = 1 << 20;
+
 double frame_count(double duration, double fps) { return std::floor(duration * fps) + 1.0; }
+
+double contact_bound(const SceneSize& z) {
+  // A particle moves less than a spacing in a step, so only the layer next to a face can hit
+  // it: about one particle per sample of one of the walls' two layers. (Bodies' and obstacles'
+  // faces are left out: their areas are known only once their meshes are read.)
+  return std::min(z.capacity, 0.5 * z.wall_samples);
+}
 
 double fluid_bytes(double capacity, double wall_samples, double grid_cells) {
   // Per particle: x, v, a, tmp (4 x 12 B); rho, p, alpha, kappa, kappa_sum, two warm starts,
-  // tmp (8 x 4 B); nb, full, id, tmp, keys, perm (6 x 4 B); the neighbour list, room for twice
-  // the 27 lattice neighbours within the support, and its count (55 x 4 B). Per wall sample:
-  // x (12 B), nine reals and two ints (44 B). Per cell 8 B.
-  return capacity * (4 * 12.0 + 14 * 4.0 + 55 * 4.0) + wall_samples * 56.0 + grid_cells * 8.0;
+  // tmp (8 x 4 B); nb, flags, nbr_n, id, keys, perm (6 x 4 B); the neighbour list, room for
+  // twice the 33 lattice points within the support (the compiled count is 27 or 33 as the
+  // support rounds; the larger is taken) (66 x 4 B); the radix sort's scratch, grown by a
+  // quarter (10 B); the
+  // initial x0, v0 kept by the scene's model and by the solver's copy of it (2 x 24 B). Per
+  // wall sample: x (12 B), nine reals and two ints (44 B), x and psi in the two models
+  // (2 x 16 B). Per cell: the fluid's and the samples' cell starts (8 B).
+  return capacity * (4 * 12.0 + 8 * 4.0 + 6 * 4.0 + 66 * 4.0 + 10.0 + 2 * 24.0) +
+         wall_samples * (56.0 + 2 * 16.0) + grid_cells * 8.0 + kFixedBytes;
+}
+
+double coupling_bytes(double capacity, double contacts, bool solids) {
+  // Per particle, grown by a quarter as the buffers of the ray coupling are: its hits against
+  // the bodies and the static set, the near-surface closest points, the exact crossing test's
+  // scratch (4 ints, 14 reals, 5 vectors: 132 B) and the coupler's travel limits (16 B); with
+  // closed obstacles, their closest points (2 ints, 3 reals, a vector: 32 B). Per contact of
+  // the exchange: its record (128 B) and three node entries of four words (48 B).
+  return 1.25 * (capacity * (132.0 + 16.0 + (solids ? 32.0 : 0.0)) + contacts * 176.0);
 }
 
 double body_bytes(double nodes, double tets, double surface_triangles) {
@@ -126,6 +151,10 @@ SceneSize scene_size(const SceneSpec& s) {
     }
     z.wall_samples = all - inner;
     z.fluid_bytes = fluid_bytes(z.capacity, z.wall_samples, z.grid_cells);
+    // The ray coupling runs with bodies, the tank's faces in the rays, or obstacles.
+    const bool rays = s.coupling.method == CouplingMethod::RayTraced;
+    if (rays && (!s.bodies.empty() || s.coupling.tank_rays || !s.obstacles.empty()))
+      z.fluid_bytes += coupling_bytes(z.capacity, contact_bound(z), !s.obstacles.empty());
   }
   for (const BodySpec& b : s.bodies) {
     const ShapeSize shape = shape_size(b);

@@ -103,6 +103,8 @@ long carve(FluidModel& fluid, const std::vector<Vec3>& x, const std::vector<Tri>
   const long removed = long(fluid.x0.size() - kept);
   fluid.x0.resize(kept);
   fluid.v0.resize(kept);
+  fluid.x0.shrink_to_fit();
+  fluid.v0.shrink_to_fit();
   return removed;
 }
 

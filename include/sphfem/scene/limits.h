@@ -25,8 +25,8 @@ struct SceneSize {
   double grid_cells = 0;
   double body_nodes = 0;  // generated shapes; a mesh file's size is known only once read
   double body_tets = 0;
-  double frames = 0;  // frames the run writes, the first at t = 0 included
-  double fluid_bytes = 0, body_bytes = 0;
+  double frames = 0;                       // frames the run writes, the first at t = 0 included
+  double fluid_bytes = 0, body_bytes = 0;  // fluid_bytes: the coupling's per particle too
   double bytes() const { return fluid_bytes + body_bytes; }
 };
 
@@ -36,6 +36,12 @@ double frame_count(double duration, double fps);
 // The bytes the fluid solver holds for `capacity` particles, the wall samples and the grid
 // (the buffers of src/sph/fluid_buffers.h and sample_set.h), and the FEM solver for a body.
 double fluid_bytes(double capacity, double wall_samples, double grid_cells);
+// The ray coupling's buffers (couple/ray_coupling.h, couple/coupler.h) for `capacity`
+// particles and at most `contacts` contacts a step; `solids`: closed obstacles in the
+// near-surface density.
+double coupling_bytes(double capacity, double contacts, bool solids);
+// Contacts a step can have against the tank's faces: the particles next to them.
+double contact_bound(const SceneSize& z);
 double body_bytes(double nodes, double tets, double surface_triangles);
 
 // Counts the scene from its fields; cheap whatever the numbers (no lattice is built).
