@@ -162,6 +162,15 @@ double heap_in_use() {
   return double(m.uordblks + m.hblkhd);
 #endif
 }
+
+// The heap a simulation of the scene holds after its first three steps.
+double held_by_run(const SceneSpec& s) {
+  malloc_trim(0);
+  const double before = heap_in_use();
+  Simulation sim(s, Backend::Cpu);
+  for (int k = 0; k < 3; ++k) sim.step(0.001);
+  return heap_in_use() - before;
+}
 }  // namespace
 
 // The memory estimate (what `check` prints and the limits compare with the free memory) against
@@ -177,18 +186,39 @@ TEST_F(SceneLimits, MemoryEstimateBoundsWhatARunHolds) {
   for (const char* e : extra) {
     const SceneSpec s = load_scene(write("{" + fluid + ", " + e + "}"));
     const SceneSize z = scene_size(s);
-    malloc_trim(0);
-    const double before = heap_in_use();
-    double held = 0;
-    {
-      Simulation sim(s, Backend::Cpu);
-      for (int k = 0; k < 3; ++k) sim.step(0.001);
-      held = heap_in_use() - before;
-    }
+    const double held = held_by_run(s);
     std::printf("%s: estimate %.0f B a particle, held %.0f B a particle (%.0f particles)\n", e,
                 z.bytes() / z.capacity, held / z.capacity, z.capacity);
     EXPECT_GE(z.bytes(), held) << e;
     EXPECT_LE(z.bytes(), 1.25 * held) << e;
+  }
+}
+
+// The same for bodies, with the surface triangles counted as `check` counts them: a ball
+// alone, with surface contact, a thin plate with contact (many surface triangles a
+// tetrahedron), and the ball in water (the fluid's estimate and the body's together).
+TEST_F(SceneLimits, BodyMemoryEstimateBoundsWhatARunHolds) {
+  const std::string ball =
+      R"("bodies": [{"name": "b", "shape": "sphere", "position": [0.15,0.2,0.15],
+      "radius": 0.06, "resolution": 12}])";
+  const std::string plate = R"("bodies": [{"name": "p", "shape": "box", "position": [0.15,0.2,0.15],
+      "size": [0.2,0.02,0.1], "resolution": 20}])";
+  const std::string contact = R"(, "fem": {"contact": true})";
+  const std::string water = R"("fluid": {"blocks": [{"min": [0,0,0], "max": [0.3,0.1,0.3]}],
+      "particle_radius": 0.006}, )";
+  const std::string scenes[] = {ball, ball + contact, plate + contact, water + ball};
+  for (const std::string& e : scenes) {
+    const SceneSpec s =
+        load_scene(write(R"({"domain": {"min": [0,0,0], "max": [0.3,0.3,0.3]}, )" + e + "}"));
+    const BodiesModel m = compile_scene_bodies(s);
+    const double estimate =
+        scene_size(s).fluid_bytes +
+        body_bytes(m.nodes, m.elements, double(m.surface.size()), s.fem.contact, s.has_fluid());
+    const double held = held_by_run(s);
+    std::printf("%s\n  %d nodes, %d tets, %zu triangles: estimate %.0f B, held %.0f B\n", e.c_str(),
+                m.nodes, m.elements, m.surface.size(), estimate, held);
+    EXPECT_GE(estimate, held) << e;
+    EXPECT_LE(estimate, 1.25 * held) << e;
   }
 }
 
@@ -210,6 +240,8 @@ TEST_F(SceneLimits, ShapeSizesBoundWhatIsGenerated) {
     const TetMesh mesh = body_rest_mesh(s.bodies[0], "bodies[0]", s.path);
     EXPECT_GE(z.tets, double(mesh.tets.size())) << body;
     EXPECT_GE(z.nodes, double(mesh.x.size())) << body;
+    // scene_size's bound on the surface triangles (2 a node) for the memory it counts
+    EXPECT_LE(double(boundary_faces(mesh.tets).size()), 2.0 * z.nodes) << body;
     EXPECT_LE(z.tets, 2.0 * double(mesh.tets.size())) << body;  // the cup: its hollow is cut
   }
 }

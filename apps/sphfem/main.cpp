@@ -83,7 +83,8 @@ int cmd_check(const std::string& path) {
           body.name.c_str(), shape_name(s.bodies[i].shape).c_str(), body.rest.size(),
           body.tets.size(), body.surface.size(), mass, pinned);
     }
-    body_b = body_bytes(b.nodes, b.elements, double(b.surface.size()));
+    body_b =
+        body_bytes(b.nodes, b.elements, double(b.surface.size()), s.fem.contact, s.has_fluid());
     tets = b.elements;
   }
   if (!s.obstacles.empty()) {

@@ -69,6 +69,20 @@ BodiesModel compile_bodies(std::vector<BodyModel> bodies, const FemSettings& s) 
 
   BodiesModel m;
   m.settings = s;
+  // Every array sized once: grown by push_back they kept up to twice their size for the run.
+  std::size_t nodes = 0, tets = 0, tris = 0;
+  for (const BodyModel& b : bodies) {
+    nodes += b.rest.size();
+    tets += b.tets.size();
+    tris += b.surface.size();
+  }
+  for (auto* v : {&m.x0, &m.v0}) v->reserve(nodes);
+  for (auto* v : {&m.mass, &m.alpha}) v->reserve(nodes);
+  m.pinned.reserve(nodes);
+  m.tets.reserve(tets);
+  m.grad.reserve(3 * tets);
+  for (auto* v : {&m.mu_vol, &m.lambda_vol, &m.beta}) v->reserve(tets);
+  m.surface.reserve(tris);
   for (const BodyModel& b : bodies) {
     m.node_offset.push_back(m.nodes);
     m.tet_offset.push_back(m.elements);

@@ -4,8 +4,8 @@
 
 namespace sphfem {
 
-std::unique_ptr<BodySolver> make_cuda_body_solver(const BodiesModel& model) {
-  return std::make_unique<BodySolverT<CudaExec>>(model);
+std::unique_ptr<BodySolver> make_cuda_body_solver(std::shared_ptr<const BodiesModel> model) {
+  return std::make_unique<BodySolverT<CudaExec>>(std::move(model));
 }
 
 }  // namespace sphfem

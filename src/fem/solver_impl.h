@@ -4,8 +4,10 @@
 
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fem/stages.h"
@@ -18,7 +20,8 @@ namespace sphfem {
 template <class Exec>
 class BodySolverT final : public BodySolver {
  public:
-  explicit BodySolverT(const BodiesModel& m) : model_(m) {
+  explicit BodySolverT(std::shared_ptr<const BodiesModel> model) : model_(std::move(model)) {
+    const BodiesModel& m = *model_;
     const MemSpace s = Exec::kSpace;
     n_ = m.nodes;
     ne_ = m.elements;
@@ -49,7 +52,7 @@ class BodySolverT final : public BodySolver {
     rot_scratch_ = Buffer<Quat>(s, ne_);
   }
 
-  const BodiesModel& model() const override { return model_; }
+  const BodiesModel& model() const override { return *model_; }
   int node_count() const override { return n_; }
   double time() const override { return t_; }
   long steps() const override { return steps_; }
@@ -57,7 +60,7 @@ class BodySolverT final : public BodySolver {
   void reset_profile() override { prof_ = BodyProfile(); }
 
   BodyStepInfo step(double dt_in) override {
-    const FemSettings& S = model_.settings;
+    const FemSettings& S = model_->settings;
     const Real dt = Real(dt_in);
     const fem::ElementView e = elements();
     const fem::NodeView nv = nodes();
@@ -255,7 +258,7 @@ class BodySolverT final : public BodySolver {
     BodyArrays a;
     a.space = Exec::kSpace;
     a.nodes = n_;
-    a.triangles = int(model_.surface.size());
+    a.triangles = int(model_->surface.size());
     a.x = x_.data();
     a.v = v_.data();
     a.impulse = impulse_.data();
@@ -342,7 +345,7 @@ class BodySolverT final : public BodySolver {
   // it). A resting body needs one solve, not two. A step that touches no wall is the plain
   // solve; what the last solve still sends out of the box, the last-resort projection puts back.
   void solve_with_walls(Real dt, BodyStepInfo& info) {
-    const FemSettings& S = model_.settings;
+    const FemSettings& S = model_->settings;
     held_ = false;
     if (!S.box) {
       solve(dt, dv_, warm_, info);
@@ -383,7 +386,7 @@ class BodySolverT final : public BodySolver {
   // components of x keep their values (filtered CG) and a warm start is always kept.
   void solve(Real dt, Buffer<Vec3>& xb, bool warm, BodyStepInfo& info,
              const std::uint8_t* mask = nullptr) {
-    const FemSettings& S = model_.settings;
+    const FemSettings& S = model_->settings;
     Vec3* x = xb.data();
     // |b|^2 in the preconditioner's norm, the scale the tolerance is relative to.
     const double bb =
@@ -431,7 +434,7 @@ class BodySolverT final : public BodySolver {
                              "raise fem cg_max_iterations, or soften the material");
   }
 
-  BodiesModel model_;
+  std::shared_ptr<const BodiesModel> model_;
   Exec ex_;
   int n_ = 0, ne_ = 0;
   double t_ = 0;

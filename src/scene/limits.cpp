@@ -118,12 +118,27 @@ double coupling_bytes(double capacity, double contacts, bool solids) {
   return 1.25 * (capacity * (132.0 + 16.0 + (solids ? 32.0 : 0.0)) + contacts * 176.0);
 }
 
-double body_bytes(double nodes, double tets, double surface_triangles) {
-  // Per node: x, v and ten solver vectors (12 x 12 B), mass, damping, preconditioner, flags,
-  // gather start (37 B), the walls' mask and force (13 B); per tet: nodes, gradients, moduli,
-  // rotated gradients, element forces, rotations, gather entries (196 B); per surface
-  // triangle 12 B.
-  return nodes * 194.0 + tets * 196.0 + surface_triangles * 12.0;
+double body_bytes(double nodes, double tets, double surface_triangles, bool contact, bool fluid) {
+  // Per node, 281 B: the solver's x, v, external force and eleven CG and step vectors
+  // (14 x 12 B), preconditioner block (24 B), mass, damping, zero damping, gather start
+  // (16 B), pinned, wall mask and zero flags (3 B); the model's x0, v0, mass, damping, gather
+  // start, pinned (37 B) and its per-body rest position, mass and pinned in double (33 B).
+  // Per tet, 372 B: the solver's nodes, gradients, moduli, gather entries (80 B), rotated
+  // gradients, element forces, rotations and their scratch (116 B); the model's same 80 B
+  // and its per-body nodes, inverse edge matrix and volume in double (96 B). Per surface
+  // triangle 36 B: its nodes in the solver, the model and the body.
+  // Surface contact: x0, reference and saved positions, the saved step's v, dv and impulses,
+  // body, inverse mass and flags per node (89 B); the saved rotations per tet (16 B); per
+  // triangle the faces' edges, tree, leaves and query lists (152 B). With fluid: the
+  // coupling's and the leak check's trees (80 B a triangle) and node positions (16 B).
+  const double per_node = 281.0 + (contact ? 89.0 : 0.0) + (fluid ? 16.0 : 0.0);
+  const double per_tet = 372.0 + (contact ? 16.0 : 0.0);
+  const double per_tri = 36.0 + (contact ? 152.0 : 0.0) + (fluid ? 80.0 : 0.0);
+  // The small tables of a run with bodies, whatever their size (per-thread pair lists, the
+  // energy meter's sums).
+  constexpr double kFixed = 64 << 10;
+  if (!(nodes > 0)) return 0.0;
+  return nodes * per_node + tets * per_tet + surface_triangles * per_tri + kFixed;
 }
 
 SceneSize scene_size(const SceneSpec& s) {
@@ -161,7 +176,10 @@ SceneSize scene_size(const SceneSpec& s) {
     z.body_nodes += shape.nodes;
     z.body_tets += shape.tets;
   }
-  z.body_bytes = body_bytes(z.body_nodes, z.body_tets, 0.0);
+  // A closed surface of V vertices has 2 V - 4 triangles (2 V per hole through it), and a
+  // body's surface vertices are some of its nodes.
+  z.body_bytes =
+      body_bytes(z.body_nodes, z.body_tets, 2.0 * z.body_nodes, s.fem.contact, s.has_fluid());
   return z;
 }
 

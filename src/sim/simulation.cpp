@@ -11,6 +11,11 @@
 
 namespace sphfem {
 
+const BodiesModel& Simulation::bodies_model() const {
+  static const BodiesModel kNone;
+  return bodies_model_ ? *bodies_model_ : kNone;
+}
+
 Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) {
   if (!scene.has_fluid() && scene.bodies.empty())
     throw std::runtime_error(
@@ -18,11 +23,11 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
   obstacles_ = compile_obstacles(scene, scene.path);
   if (scene.has_fluid()) fluid_model_ = compile_fluid(scene);
   if (!scene.bodies.empty()) {
-    bodies_model_ = compile_scene_bodies(scene);
+    bodies_model_ = std::make_shared<const BodiesModel>(compile_scene_bodies(scene));
     bodies_ = make_body_solver(bodies_model_, backend);
   }
   if (scene.has_fluid()) {
-    if (bodies_) carved_ = carve_bodies(fluid_model_, bodies_model_);
+    if (bodies_) carved_ = carve_bodies(fluid_model_, *bodies_model_);
     carved_ += carve_obstacles(fluid_model_, obstacles_);
     fluid_ = make_fluid_solver(fluid_model_, backend);
   }
@@ -43,16 +48,16 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
     coupling_ = make_ray_coupling(cs, bodies_.get(), backend);
     // The baseline: samples a particle spacing apart on every body surface (Akinci et al.).
     if (!rays && bodies_)
-      fluid_->set_moving_samples(sample_surface(bodies_model_.x0, bodies_model_.surface,
+      fluid_->set_moving_samples(sample_surface(bodies_model().x0, bodies_model().surface,
                                                 double(fluid_model_.params.spacing)),
-                                 bodies_model_.surface, bodies_model_.nodes);
+                                 bodies_model().surface, bodies_model().nodes);
   }
   if (fluid_ && bodies_) inside_check_ = make_collider(Backend::Cpu);
   if (bodies_ && scene.fem.contact) {
     ContactSettings cs;
     cs.gap = scene.fem.contact_gap;
     cs.friction = scene.fem.friction;
-    contact_ = std::make_unique<SurfaceContact>(bodies_model_, cs);
+    contact_ = std::make_unique<SurfaceContact>(*bodies_model_, cs);
   }
   if (bodies_ && !obstacles_.empty()) {
     ObstacleGroup still;
@@ -238,7 +243,7 @@ void Simulation::step_bodies(double dt) {
       bodies_->snapshot(s);  // the velocities the step gave, before any contact
       J.resize(s.v.size());
       for (std::size_t i = 0; i < J.size(); ++i)
-        J[i] += (v_after[i] - s.v[i]) * bodies_model_.mass[i];
+        J[i] += (v_after[i] - s.v[i]) * bodies_model().mass[i];
       bodies_->load(step_start_);
       bodies_->add_node_impulses(J);
       implicit_step();
@@ -309,7 +314,8 @@ void Simulation::collide_obstacles(const std::vector<Vec3>& before, std::vector<
   const Real mu = Real(scene_.fem.friction);
   for (std::size_t i = 0; i < n; ++i) {
     // A pinned node is held (infinite mass): an obstacle on a path meeting it does not move it.
-    if (best[i].group < 0 || (i < bodies_model_.pinned.size() && bodies_model_.pinned[i])) continue;
+    if (best[i].group < 0 || (i < bodies_model().pinned.size() && bodies_model().pinned[i]))
+      continue;
     const std::size_t g = std::size_t(best[i].group);
     const RigidPose &p0 = start[g], &p1 = end[g];
     const Tri& t = obstacle_groups_[g].tris[std::size_t(best[i].face)];
@@ -386,7 +392,7 @@ long Simulation::count_inside() {
 
 long Simulation::count_inside(const std::vector<Vec3>& particles, const std::vector<Vec3>& nodes) {
   if (!inside_check_ || particles.empty()) return 0;
-  inside_check_->build(nodes, bodies_model_.surface);
+  inside_check_->build(nodes, bodies_model().surface);
   long n = 0;
   for (std::uint8_t in : inside_check_->inside(particles)) n += in;
   return n;

@@ -25,7 +25,7 @@ bool Simulation::emitter_enabled(int e) const {
 }
 
 std::vector<int> Simulation::pinned_nodes(int body) const {
-  const BodiesModel& m = bodies_model_;
+  const BodiesModel& m = bodies_model();
   if (body < 0 || std::size_t(body) >= m.bodies.size())
     throw std::out_of_range("body " + std::to_string(body) + ": the scene has " +
                             std::to_string(m.bodies.size()) + " bodies, numbered from 0");
@@ -40,11 +40,11 @@ void Simulation::move_pinned(const std::vector<int>& nodes, const std::vector<Ve
     throw std::invalid_argument("move_pinned: " + std::to_string(nodes.size()) + " nodes and " +
                                 std::to_string(x.size()) + " positions; give one per node");
   for (int i : nodes)
-    if (i < 0 || i >= bodies_model_.nodes || !bodies_model_.pinned[std::size_t(i)])
+    if (i < 0 || i >= bodies_model().nodes || !bodies_model().pinned[std::size_t(i)])
       throw std::invalid_argument("move_pinned: node " + std::to_string(i) +
-                                  (i < 0 || i >= bodies_model_.nodes
+                                  (i < 0 || i >= bodies_model().nodes
                                        ? " is out of range (the bodies have " +
-                                             std::to_string(bodies_model_.nodes) + " nodes)"
+                                             std::to_string(bodies_model().nodes) + " nodes)"
                                        : " is not pinned; pin it in the scene (bodies[].pinned)"));
   if (nodes.empty()) return;
   BodySnapshot b;

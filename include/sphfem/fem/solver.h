@@ -114,6 +114,10 @@ class BodySolver {
 };
 
 // Throws std::runtime_error when the backend is not usable here (e.g. CUDA without a GPU).
+// The solver keeps the model it is given (shared, not copied: a body's model is about half of
+// what its run holds); the first form copies it.
 std::unique_ptr<BodySolver> make_body_solver(const BodiesModel& model, Backend backend);
+std::unique_ptr<BodySolver> make_body_solver(std::shared_ptr<const BodiesModel> model,
+                                             Backend backend);
 
 }  // namespace sphfem

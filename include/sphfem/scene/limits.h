@@ -42,7 +42,11 @@ double fluid_bytes(double capacity, double wall_samples, double grid_cells);
 double coupling_bytes(double capacity, double contacts, bool solids);
 // Contacts a step can have against the tank's faces: the particles next to them.
 double contact_bound(const SceneSize& z);
-double body_bytes(double nodes, double tets, double surface_triangles);
+// What the bodies of a run hold for their nodes, tetrahedra and surface triangles: the FEM
+// solver's buffers and the model it shares with the simulation; with `contact` (fem.contact)
+// the surface contact's trees and lists and the step's saved state; with `fluid` the ray
+// coupling's and the leak check's trees over the surfaces.
+double body_bytes(double nodes, double tets, double surface_triangles, bool contact, bool fluid);
 
 // Counts the scene from its fields; cheap whatever the numbers (no lattice is built).
 SceneSize scene_size(const SceneSpec& scene);

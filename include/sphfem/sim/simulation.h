@@ -85,7 +85,7 @@ class Simulation {
   const FluidModel& fluid_model() const { return fluid_model_; }
   // Initial particles left out because they lay inside a body or against its surface.
   long carved_particles() const { return carved_; }
-  const BodiesModel& bodies_model() const { return bodies_model_; }
+  const BodiesModel& bodies_model() const;
   const ObstaclesModel& obstacles() const { return obstacles_; }
   // The last step's surface contact (empty stats without fem.contact or bodies); the gap the
   // surfaces keep (0 without).
@@ -112,7 +112,7 @@ class Simulation {
 
   SceneSpec scene_;
   FluidModel fluid_model_;
-  BodiesModel bodies_model_;
+  std::shared_ptr<const BodiesModel> bodies_model_;  // shared with the body solver
   std::unique_ptr<FluidSolver> fluid_;
   std::unique_ptr<BodySolver> bodies_;
   std::unique_ptr<RayCoupling> coupling_;
