@@ -1,5 +1,8 @@
 #include "bench.h"
 
+#include <malloc.h>
+#include <sys/resource.h>
+
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -17,6 +20,17 @@ std::string cpu_model() {
   while (std::getline(f, line))
     if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
   return "unknown CPU";
+}
+
+double heap_held_bytes() {
+  const struct mallinfo2 m = mallinfo2();
+  return double(m.uordblks + m.hblkhd);
+}
+
+double peak_rss_bytes() {
+  struct rusage u {};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) * 1024.0;  // kilobytes on Linux
 }
 
 namespace {
@@ -56,9 +70,12 @@ int run_bench(const BenchOptions& opt) {
   for (SolverKind kind : {SolverKind::WCSPH, SolverKind::DFSPH}) {
     const char* name = kind == SolverKind::WCSPH ? "wcsph" : "dfsph";
     if (opt.solver != "both" && opt.solver != name) continue;
+    malloc_trim(0);
+    const double heap0 = heap_held_bytes();
     const FluidModel model = compile_fluid(bench_scene(kind, opt.side > 0 ? opt.side : 40));
     auto solver = make_fluid_solver(model, backend);
     for (int i = 0; i < 20; ++i) solver->step(1.0);  // warm-up: caches, allocations
+    const double held = heap_held_bytes() - heap0;
     solver->reset_profile();
     long iters = 0;
     const auto t0 = std::chrono::steady_clock::now();
@@ -81,6 +98,8 @@ int run_bench(const BenchOptions& opt) {
     if (kind == SolverKind::DFSPH)
       std::printf(", %.1f pressure iterations/step", double(iters) / opt.steps);
     std::printf(")\n");
+    std::printf("  %-12s %8.1f MB held (%.0f B a particle, walls included), peak RSS %.1f MB\n",
+                "memory", held / 1e6, held / solver->count(), peak_rss_bytes() / 1e6);
     std::snprintf(line, sizeof line, "%s,\"%s\",%d,%s,%s,%d,%d%s,%.3f,%.3f,%.2f\n", date,
                   device.c_str(), cpu_threads(), opt.backend.c_str(), name, solver->count(),
                   opt.steps, phases.c_str(), ms, mps, double(iters) / opt.steps);

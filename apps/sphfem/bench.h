@@ -29,6 +29,11 @@ std::string cpu_model();  // the CPU's model name, for result files
 void append_results(const std::string& dir, const std::string& file, const std::string& header,
                     const std::string& rows);
 int run_fem_bench(const BenchOptions& opt);
+// Bytes the heap holds now (glibc's mallinfo2, mapped chunks included): what a solver holds is
+// the difference around its construction and first steps.
+double heap_held_bytes();
+// The process's peak resident set so far, in bytes.
+double peak_rss_bytes();
 int run_paper_bench(const BenchOptions& opt);  // Table 1 of the paper (bench_paper.cpp)
 // Measured steps of the paper benchmark when --steps is not given.
 constexpr int kPaperBenchSteps = 50;

@@ -1,6 +1,8 @@
 // `sphfem bench --fem`: FEM time per step for bodies at the tetrahedron counts of the paper's
 // Table 1 (generated spheres, and the Stanford bunny tetrahedralised by TetGen), printed
 // beside the paper's GPU times.
+#include <malloc.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -8,6 +10,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -53,6 +56,7 @@ struct Result {
   std::string body, how;
   long tets = 0, nodes = 0;
   double ms = 0, cg = 0;
+  double bytes_per_tet = 0;  // heap the solver and its model hold, nodes included
   BodyProfile prof;
 };
 
@@ -101,9 +105,13 @@ Result run_case(const Case& c, Backend backend, int steps) {
   const double cut = lo.y + 0.05 * (hi.y - lo.y);
   const auto pinned = pin_nodes(c.mesh, [&](const Vec3d& x) { return x.y <= cut; });
   const FemSettings set;  // the solver's defaults, as a scene without a `fem` section gets
-  auto solver =
-      make_body_solver(compile_bodies({compile_body(c.mesh, mat, pinned, c.body)}, set), backend);
+  malloc_trim(0);
+  const double heap0 = heap_held_bytes();
+  auto solver = make_body_solver(std::make_shared<const BodiesModel>(compile_bodies(
+                                     {compile_body(c.mesh, mat, pinned, c.body)}, set)),
+                                 backend);
   for (int i = 0; i < kWarmUp; ++i) solver->step(kDt);
+  const double held = heap_held_bytes() - heap0;
   solver->reset_profile();
   const auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < steps; ++i) solver->step(kDt);
@@ -112,6 +120,7 @@ Result run_case(const Case& c, Backend backend, int steps) {
   r.how = c.how;
   r.tets = long(c.mesh.tets.size());
   r.nodes = long(c.mesh.x.size());
+  r.bytes_per_tet = held / double(std::max(1L, r.tets));
   r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
          steps;
   r.prof = solver->profile();
@@ -214,8 +223,8 @@ int run_fem_bench(const BenchOptions& opt) {
       "FEM benchmark on %s, %d threads, %s backend: implicit Euler, dt %g ms, E 100 kPa, "
       "bottom 5 %% pinned, %d steps after %d warm-up\n\n",
       device.c_str(), cpu_threads(), opt.backend.c_str(), kDt * 1e3, opt.steps, kWarmUp);
-  std::printf("%-8s %7s %7s %9s %8s   %-22s %s\n", "body", "tets", "nodes", "ms/step", "CG it",
-              "paper GPU (Table 1)", "mesh");
+  std::printf("%-8s %7s %7s %9s %8s %7s   %-22s %s\n", "body", "tets", "nodes", "ms/step", "CG it",
+              "B/tet", "paper GPU (Table 1)", "mesh");
   char line[1024];
   std::string csv;
   std::time_t now = std::time(nullptr);
@@ -226,8 +235,8 @@ int run_fem_bench(const BenchOptions& opt) {
     const PaperRow& p = nearest_paper_row(r.tets);
     char paper[64];
     std::snprintf(paper, sizeof paper, "%s tets %5.1f ms", thousands(long(p.tets)).c_str(), p.ms);
-    std::printf("%-8s %7ld %7ld %9.2f %8.1f   %-22s %s\n", r.body.c_str(), r.tets, r.nodes, r.ms,
-                r.cg, paper, r.how.c_str());
+    std::printf("%-8s %7ld %7ld %9.2f %8.1f %7.0f   %-22s %s\n", r.body.c_str(), r.tets, r.nodes,
+                r.ms, r.cg, r.bytes_per_tet, paper, r.how.c_str());
     std::fflush(stdout);
     const double per = 1.0 / double(std::max(1L, r.prof.steps));
     std::snprintf(line, sizeof line,
@@ -237,6 +246,7 @@ int run_fem_bench(const BenchOptions& opt) {
                   r.prof.ms_solve * per, r.prof.ms_integrate * per, r.ms, r.cg, p.tets, p.ms);
     csv += line;
   }
+  if (!cases.empty()) std::printf("peak RSS %.1f MB\n", peak_rss_bytes() / 1e6);
   if (!opt.out_dir.empty() && !cases.empty()) {
     std::printf("\n");
     append_results(opt.out_dir, "fem.csv",
