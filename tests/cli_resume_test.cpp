@@ -124,22 +124,23 @@ TEST_F(Resume, SplitRunMatchesStraightRunBitForBit) {
   EXPECT_NE(pvd.find("fluid_000012.vtu"), std::string::npos);
 }
 
-TEST_F(Resume, RunKilledMidStepResumesFromItsLastCheckpoint) {
-  const Result whole = straight();
-  ASSERT_EQ(whole.code, 0) << whole.out;
-  const std::string s = scene("0.05");
-  const fs::path out = dir_ / "out";
+// Runs the scene into out and kills it with SIGKILL once it has written a checkpoint and
+// gone on stepping; false when it finished first.
+bool run_and_kill(const std::string& s, const fs::path& out,
+                  const std::vector<std::string>& extra) {
   const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
+  if (pid < 0) return false;
   if (pid == 0) {
     const std::string cli_path = SPHFEM_CLI;
     std::freopen("/dev/null", "w", stdout);
     std::freopen("/dev/null", "w", stderr);
-    execl(cli_path.c_str(), cli_path.c_str(), "run", s.c_str(), "--out", out.c_str(), "--quiet",
-          static_cast<char*>(nullptr));
+    std::vector<const char*> argv = {cli_path.c_str(), "run",       s.c_str(),
+                                     "--out",          out.c_str(), "--quiet"};
+    for (const std::string& a : extra) argv.push_back(a.c_str());
+    argv.push_back(nullptr);
+    execv(cli_path.c_str(), const_cast<char* const*>(argv.data()));
     _exit(127);
   }
-  // Kill it once it has written a checkpoint and gone on stepping.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   while (!fs::exists(out / "checkpoint.bin") && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -147,12 +148,40 @@ TEST_F(Resume, RunKilledMidStepResumesFromItsLastCheckpoint) {
   kill(pid, SIGKILL);
   int status = 0;
   waitpid(pid, &status, 0);
+  return !WIFEXITED(status);
+}
+
+TEST_F(Resume, RunKilledMidStepResumesFromItsLastCheckpoint) {
+  const Result whole = straight();
+  ASSERT_EQ(whole.code, 0) << whole.out;
+  const std::string s = scene("0.05");
+  const fs::path out = dir_ / "out";
+  const bool killed = run_and_kill(s, out, {});
   ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
-  if (WIFEXITED(status)) GTEST_SKIP() << "the run finished before it could be killed";
+  if (!killed) GTEST_SKIP() << "the run finished before it could be killed";
   const Result rest = cli("run " + s + " --out " + out.string() + " --quiet --resume");
   ASSERT_EQ(rest.code, 0) << rest.out;
   EXPECT_EQ(hash_of(rest.out), hash_of(whole.out)) << rest.out;
   EXPECT_EQ(rows_without_timings(out / "gauges.csv"), straight_rows_);
+}
+
+// The interval given on the command line (as scripts/soak.sh does) instead of in the scene:
+// the scene's identity leaves it out, so the run resumes with or without it.
+TEST_F(Resume, CheckpointIntervalFromTheCommandLine) {
+  const Result whole = straight();
+  ASSERT_EQ(whole.code, 0) << whole.out;
+  const std::string s = scene("0");
+  const fs::path out = dir_ / "out";
+  const bool killed = run_and_kill(s, out, {"--checkpoint-every", "0.05"});
+  // Without the interval the first checkpoint is the run's last, and it ends before the kill.
+  ASSERT_TRUE(killed) << "no checkpoint before the run's end";
+  const Result rest = cli("run " + s + " --out " + out.string() + " --quiet --resume");
+  ASSERT_EQ(rest.code, 0) << rest.out;
+  EXPECT_EQ(hash_of(rest.out), hash_of(whole.out)) << rest.out;
+  EXPECT_EQ(rows_without_timings(out / "gauges.csv"), straight_rows_);
+  const Result zero = cli("run " + s + " --out " + out.string() + " --checkpoint-every 0");
+  EXPECT_NE(zero.code, 0) << zero.out;
+  EXPECT_NE(zero.out.find("--checkpoint-every"), std::string::npos) << zero.out;
 }
 
 TEST_F(Resume, DamagedOrForeignCheckpointsAreRefusedAndNothingIsLost) {

@@ -112,8 +112,10 @@ int cmd_check(const std::string& path) {
 }
 
 int cmd_run(const std::string& path, const std::string& out, const std::string& backend,
-            int threads, double duration, bool quiet, bool resume) {
-  const SceneSpec s = load_scene(path);
+            int threads, double duration, double checkpoint_every, bool quiet, bool resume) {
+  SceneSpec s = load_scene(path);
+  // Not part of the scene's identity, so a run may resume with another interval.
+  if (checkpoint_every > 0) s.output.checkpoint_every = checkpoint_every;
   RunOptions opt;
   opt.out_dir = out.empty() ? default_out(path) : out;
   opt.backend = parse_backend(backend);
@@ -173,6 +175,11 @@ int main(int argc, char** argv) {
   run->add_option("--duration", duration, "simulated seconds (overrides the scene)")
       ->check(CLI::NonNegativeNumber);
   run->add_flag("--quiet", quiet, "no progress line");
+  double checkpoint_every = -1;
+  run->add_option("--checkpoint-every", checkpoint_every,
+                  "write checkpoint.bin every S simulated seconds (overrides "
+                  "output.checkpoint_every)")
+      ->check(CLI::PositiveNumber);
   bool resume = false;
   run->add_flag("--resume", resume,
                 "continue from the checkpoint in the output folder (output.checkpoint_every)");
@@ -224,7 +231,8 @@ int main(int argc, char** argv) {
   try {
     if (*check) return cmd_check(scene);
     if (*run) {
-      const int code = cmd_run(scene, out, backend, threads, duration, quiet, resume);
+      const int code =
+          cmd_run(scene, out, backend, threads, duration, checkpoint_every, quiet, resume);
       if (code != 0 || !render_after) return code;
       render_opt.out_dir = out.empty() ? default_out(scene) : out;
       return run_render(render_opt);
