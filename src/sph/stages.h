@@ -77,16 +77,13 @@ SPHFEM_HD void for_fluid_neighbors(const FluidView& f, const GridView& g, int i,
 // value).
 struct PairChunk {
   static constexpr int kSize = 32;
-  std::uint32_t j[kSize];
   Real rx[kSize], ry[kSize], rz[kSize], r2[kSize], w[kSize], s[kSize];
 
   template <bool WithW, class Kern>
   void fill(const Kern& kernel, const std::uint32_t* list, std::size_t sk, const Vec3* x,
             const Vec3& xi, int m) {
     for (int k = 0; k < m; ++k) {
-      const std::uint32_t jj = list[std::size_t(k) * sk];
-      const Vec3 r = xi - x[jj];
-      j[k] = jj;
+      const Vec3 r = xi - x[list[std::size_t(k) * sk]];
       rx[k] = r.x;
       ry[k] = r.y;
       rz[k] = r.z;
@@ -127,7 +124,7 @@ SPHFEM_HD void for_fluid_pairs(const FluidView& f, const GridView& g, const Kern
         c.fill<WithW>(K.wendland, part, f.nbr_sk, f.x, xi, m);
       for (int k = 0; k < m; ++k) {
         const Vec3 r(c.rx[k], c.ry[k], c.rz[k]);
-        fn(c.j[k], r, c.r2[k], WithW ? c.w[k] : Real(0), r * c.s[k]);
+        fn(part[std::size_t(k) * f.nbr_sk], r, c.r2[k], WithW ? c.w[k] : Real(0), r * c.s[k]);
       }
     }
     return;
