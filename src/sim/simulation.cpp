@@ -48,9 +48,9 @@ Simulation::Simulation(const SceneSpec& scene, Backend backend) : scene_(scene) 
     coupling_ = make_ray_coupling(cs, bodies_.get(), backend);
     // The baseline: samples a particle spacing apart on every body surface (Akinci et al.).
     if (!rays && bodies_)
-      fluid_->set_moving_samples(sample_surface(bodies_model().x0, bodies_model().surface,
+      fluid_->set_moving_samples(sample_surface(bodies_model_->x0, bodies_model_->surface,
                                                 double(fluid_model_.params.spacing)),
-                                 bodies_model().surface, bodies_model().nodes);
+                                 bodies_model_->surface, bodies_model_->nodes);
   }
   if (fluid_ && bodies_) inside_check_ = make_collider(Backend::Cpu);
   if (bodies_ && scene.fem.contact) {
@@ -242,8 +242,8 @@ void Simulation::step_bodies(double dt) {
       const std::vector<Vec3> v_after = s.v;
       bodies_->snapshot(s);  // the velocities the step gave, before any contact
       J.resize(s.v.size());
-      for (std::size_t i = 0; i < J.size(); ++i)
-        J[i] += (v_after[i] - s.v[i]) * bodies_model().mass[i];
+      const std::vector<Real>& mass = bodies_model_->mass;
+      for (std::size_t i = 0; i < J.size(); ++i) J[i] += (v_after[i] - s.v[i]) * mass[i];
       bodies_->load(step_start_);
       bodies_->add_node_impulses(J);
       implicit_step();
@@ -312,10 +312,10 @@ void Simulation::collide_obstacles(const std::vector<Vec3>& before, std::vector<
     }
   }
   const Real mu = Real(scene_.fem.friction);
+  const std::vector<std::uint8_t>& pinned = bodies_model_->pinned;
   for (std::size_t i = 0; i < n; ++i) {
     // A pinned node is held (infinite mass): an obstacle on a path meeting it does not move it.
-    if (best[i].group < 0 || (i < bodies_model().pinned.size() && bodies_model().pinned[i]))
-      continue;
+    if (best[i].group < 0 || (i < pinned.size() && pinned[i])) continue;
     const std::size_t g = std::size_t(best[i].group);
     const RigidPose &p0 = start[g], &p1 = end[g];
     const Tri& t = obstacle_groups_[g].tris[std::size_t(best[i].face)];
@@ -392,7 +392,7 @@ long Simulation::count_inside() {
 
 long Simulation::count_inside(const std::vector<Vec3>& particles, const std::vector<Vec3>& nodes) {
   if (!inside_check_ || particles.empty()) return 0;
-  inside_check_->build(nodes, bodies_model().surface);
+  inside_check_->build(nodes, bodies_model_->surface);
   long n = 0;
   for (std::uint8_t in : inside_check_->inside(particles)) n += in;
   return n;
