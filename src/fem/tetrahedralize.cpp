@@ -105,6 +105,7 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& o) {
     if (tet_volume(m.x[t.v[0]], m.x[t.v[1]], m.x[t.v[2]], m.x[t.v[3]]) < 0.0)
       std::swap(t.v[2], t.v[3]);
   }
+  peel_flat_caps(m, o.peel_caps);
   try {
     validate_mesh(m, "the tetrahedralisation");
   } catch (const std::runtime_error& e) { throw MeshError(file, e.what(), kRemesh); }

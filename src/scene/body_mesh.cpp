@@ -116,6 +116,7 @@ TetMesh read_mesh_file(const BodySpec& b, const std::string& at, const std::stri
     TetgenOptions o;
     o.max_volume = b.max_volume;
     o.quality = b.quality;
+    o.peel_caps = b.peel_caps;
     return tetrahedralize(s, o);
   } catch (const MeshError& e) {
     // The mesh error already names the mesh file, the problem and the fix.

@@ -499,6 +499,13 @@ const ObjectTable& body_table() {
                   "Surface meshes: largest radius-edge ratio of a tetrahedron (TetGen `q`); "
                   "lower is better shaped but finer; 0 turns quality refinement off.")
           .constraint("0 or at least " + format_number(kMinTetgenQuality))
+          .number("peel_caps", &BodySpec::peel_caps, "-", Range().ge(0).lt(0.8),
+                  "Surface meshes: remove the flat caps TetGen leaves where the surface is "
+                  "nearly flat or ends in a thin lip (elements with two or three faces on it "
+                  "whose smallest height is under this share of their longest edge or of the "
+                  "surface's median edge, whichever is shorter), which a floor pressed on "
+                  "them flattens to zero volume; 0.3 catches them (the paper's bunny), 0 "
+                  "keeps TetGen's mesh as it is.")
           .object("material", &BodySpec::material, material_table(),
                   "Elastic material; see `bodies[].material`.")
           .vec3("velocity", &BodySpec::velocity, "m/s", "Initial velocity of the free nodes.")

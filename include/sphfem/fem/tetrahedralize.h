@@ -17,6 +17,7 @@ struct TetgenOptions {
   double max_volume = 0.0;  // m^3, largest tetrahedron ("a"); 0 = no limit
   double quality = 1.414;   // largest radius-edge ratio ("q"); 0 = no quality refinement
   bool quiet = true;        // suppress TetGen's report on stdout ("Q")
+  double peel_caps = 0.0;   // peel_flat_caps of the result below this flatness; 0 = none
 };
 
 // The TetGen command-line switches for the options, e.g. "pq1.414a1e-06Q".

@@ -108,6 +108,7 @@ struct BodySpec {
   Vec3d offset;                // m, mesh
   double max_volume = TetgenOptions{}.max_volume;  // m^3, surface meshes: TetGen "a"
   double quality = TetgenOptions{}.quality;        // surface meshes: TetGen "q"
+  double peel_caps = TetgenOptions{}.peel_caps;    // surface meshes: peel_flat_caps
   Material material;
   Vec3d velocity;  // m/s, initial velocity of the free nodes
   PinSpec pinned;
