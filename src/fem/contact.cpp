@@ -173,6 +173,17 @@ SurfaceContact::SurfaceContact(const BodiesModel& m, const ContactSettings& s) {
   inv_mass_.resize(std::size_t(m.nodes));
   for (int i = 0; i < m.nodes; ++i)
     inv_mass_[i] = m.pinned[i] || !(m.mass[i] > Real(0)) ? Real(0) : Real(1) / m.mass[i];
+  // Each node's height over the opposite face of its elements at rest, the least of them: a
+  // push of the node by as much toward that face turns the element inside out.
+  height_.assign(std::size_t(m.nodes), std::numeric_limits<Real>::max());
+  for (const Tet& t : m.tets)
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 &a = x0_[t.v[(k + 1) % 4]], &b = x0_[t.v[(k + 2) % 4]], &c = x0_[t.v[(k + 3) % 4]];
+      const Vec3 n = cross(b - a, c - a);
+      const Real area2 = norm(n);
+      if (area2 > Real(0))
+        height_[t.v[k]] = std::min(height_[t.v[k]], std::fabs(dot(x0_[t.v[k]] - a, n)) / area2);
+    }
   box_ = m.settings.box;
   box_lo_ = Vec3(m.settings.box_lo);
   box_hi_ = Vec3(m.settings.box_hi);
@@ -604,7 +615,15 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
     detect(x_old, x, pairs);
     bool violated = false;
     for (const Pair& c : pairs)
-      if (contact(c, x, k) && k.d < g * Real(0.999)) violated = true;
+      if (contact(c, x, k) && k.d < g * Real(0.999)) {
+        violated = true;
+        if (st.rounds == 0) {
+          Real h = std::numeric_limits<Real>::max();
+          for (int i = 0; i < 4; ++i)
+            if (k.w[i] != Real(0)) h = std::min(h, height_[k.node[i]]);
+          st.depth_ratio = std::max(st.depth_ratio, double((g - k.d) / h));
+        }
+      }
     if (!violated) break;
     touched.insert(touched.end(), pairs.begin(), pairs.end());
     for (int s = 0; s < sweeps_; ++s)

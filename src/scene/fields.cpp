@@ -613,6 +613,11 @@ const ObjectTable& fem_table() {
           .number("contact_gap", &FemSpec::contact_gap, "m", kNonNegative,
                   "Distance kept between touching surfaces; 0 is a tenth of the median "
                   "surface edge at rest.")
+          .integer("contact_halvings", &FemSpec::contact_halvings, "-", Range().ge(0).le(6),
+                   "With `contact`: when surfaces met deeper than half the rest height of the "
+                   "elements at the pair, the bodies' step is taken again in two halves, each "
+                   "of which may halve again, this many times at most (the shortest body step "
+                   "is the step / 2^n); 0 never halves.")
           .build();
   return t;
 }

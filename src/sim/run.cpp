@@ -65,7 +65,8 @@ std::vector<std::string> gauge_columns(const SceneSpec& scene) {
                                 "wall_held",
                                 "min_surface_gap",
                                 "inverted_elements",
-                                "intersecting_pairs"};
+                                "intersecting_pairs",
+                                "body_halvings"};
   for (int k = 0; k < int(Stage::Count); ++k)
     c.push_back(std::string("ms_") + stage_name(Stage(k)));
   c.push_back("ms_leak_check");
@@ -387,7 +388,8 @@ RunSummary run_scene(const SceneSpec& scene, const RunOptions& opt) {
       row.insert(row.end(), {double(ct.pairs) * per_step, double(ct.held) * per_step,
                              std::isfinite(ct.min_gap) ? ct.min_gap : -1.0,
                              fem ? double(inverted_elements(bodies, body_snap.x)) : 0.0,
-                             fem ? double(intersecting_pairs(bodies, body_snap.x)) : 0.0});
+                             fem ? double(intersecting_pairs(bodies, body_snap.x)) : 0.0,
+                             double(ct.halvings)});
     }
     for (int k = 0; k < int(Stage::Count); ++k) row.push_back(prof.ms[k] * per);
     row.push_back(hs.ms_leak_check * per);

@@ -35,6 +35,9 @@ struct ContactStats {
   // m, the smallest signed vertex-face distance among the candidate pairs after the
   // response (negative: a vertex still behind a face); +inf when no pair was near.
   double min_gap = std::numeric_limits<double>::infinity();
+  // The deepest pair found before the response, over the least rest height of its nodes'
+  // elements (a push that deep can turn an element inside out at 1).
+  double depth_ratio = 0;
 };
 
 class SurfaceContact {
@@ -88,6 +91,7 @@ class SurfaceContact {
   std::vector<std::array<int, 2>> edges_;  // unique surface edges
   std::vector<std::array<int, 3>> tri_edges_;
   std::vector<Real> inv_mass_;  // 0 on pinned nodes
+  std::vector<Real> height_;    // per node, its least height over an element's opposite face
   std::vector<collide::BvhNode> tree_;
   std::vector<int> prims_;
   // The queries grouped by the leaf that holds a face of theirs (a vertex's first face, an

@@ -28,6 +28,7 @@ struct BodyContactTally {
   long pairs = 0;  // surface contact pairs (fem/contact.h), summed over the steps
   long held = 0;   // nodes the tank's walls held inside the solve, summed over the steps
   double min_gap = std::numeric_limits<double>::infinity();  // m, over the steps' pairs
+  long halvings = 0;  // body steps taken again in two halves (surfaces met too deep)
 };
 
 // One coupled step is Simulation::step, read top to bottom: its stages (core/profile.h) are
@@ -98,6 +99,8 @@ class Simulation {
   template <class F>
   void timed(Stage s, F&& fn);
   void step_bodies(double dt);
+  void step_bodies_span(double t0, double dt, int halvings, ContactStats& step);
+  void step_bodies_once(double t0, double dt);
   void collide_obstacles(const std::vector<Vec3>& before, std::vector<Vec3>& x,
                          std::vector<Vec3>& v, std::vector<std::uint8_t>& moved, double t0,
                          double dt);
@@ -123,7 +126,8 @@ class Simulation {
   ContactStats last_contact_;
   BodyState step_start_;  // the bodies at the start of the step, for its contact pass
   BodyContactTally tally_;
-  static constexpr int kContactPasses = 3;  // implicit steps again with the contact's impulses
+  static constexpr int kContactPasses = 3;      // implicit steps again with the contact's impulses
+  static constexpr double kHalvingDepth = 0.5;  // step_bodies_span: deepest pair / rest height
   StepProfile profile_;
   double t_bodies_ = 0;  // without fluid
   double t_step_ = 0;    // when the step being taken began
