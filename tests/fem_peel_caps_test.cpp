@@ -90,6 +90,31 @@ TEST(FemPeelCaps, PeelsTheBaseCapsAndKeepsAClosedSurface) {
   }
 }
 
+// An ear: one element standing on a face of a cube's mesh, its tip held by nothing else. A
+// tip lower than 0.3 of the surface's median edge is peeled with its node; a tall one stays.
+TEST(FemPeelCaps, PeelsLowEarsWithTheirTip) {
+  for (double height : {0.1, 0.5}) {
+    TetMesh m = make_box(Vec3d(0, 0, 0), Vec3d(1, 1, 1), 2, 2, 2);
+    const std::size_t nodes = m.x.size(), elements = m.tets.size();
+    const std::vector<Tri> faces = boundary_faces(m.tets);
+    const Tri& f = faces.front();
+    const Vec3d a = m.x[std::size_t(f.v[0])], b = m.x[std::size_t(f.v[1])],
+                c = m.x[std::size_t(f.v[2])];
+    const Vec3d n = cross(b - a, c - a) / norm(cross(b - a, c - a));  // outward
+    m.x.push_back((a + b + c) / 3.0 + n * height);
+    // The face is counter-clockwise seen from outside: with the tip above it, (a, b, c, tip)
+    // is positively oriented.
+    m.tets.push_back(Tet{{f.v[0], f.v[1], f.v[2], int(nodes)}});
+    ASSERT_GT(tet_volume(m, int(elements)), 0.0);
+    const int peeled = peel_flat_caps(m, 0.3);
+    std::printf("[ measured ] ear %.1f of the cube's half-edge high: %d peeled\n", height / 0.5,
+                peeled);
+    EXPECT_EQ(peeled, height < 0.15 ? 1 : 0);
+    EXPECT_EQ(m.x.size(), height < 0.15 ? nodes : nodes + 1);
+    EXPECT_NO_THROW(validate_mesh(m, "ear"));
+  }
+}
+
 // The block, soft and heavy (E = 30 kPa, 1,500 kg/m3, as the paper's bunny), set on the floor:
 // its weight presses the bumpy base flat. Without peeling, elements end at zero volume.
 int worst_inverted_on_the_floor(double peel) {

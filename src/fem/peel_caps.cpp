@@ -45,6 +45,14 @@ double flatness(const TetMesh& m, const Tet& t, double scale) {
   return edge > 0 ? height / edge : 0.0;
 }
 
+// Height of node k over the face opposite it.
+double tip_height(const TetMesh& m, const Tet& t, int k) {
+  const Vec3d& a = m.x[t.v[kFace[k][0]]];
+  const Vec3d n = cross(m.x[t.v[kFace[k][1]]] - a, m.x[t.v[kFace[k][2]]] - a);
+  const double area2 = norm(n);
+  return area2 > 0 ? std::fabs(dot(m.x[t.v[k]] - a, n)) / area2 : 0.0;
+}
+
 }  // namespace
 
 int peel_flat_caps(TetMesh& m, double max_flatness) {
@@ -90,6 +98,7 @@ int peel_flat_caps(TetMesh& m, double max_flatness) {
       for (int k = 0; k < 4; ++k) n += (on_boundary[k] = faces[face_key(t, k)] == 1);
       bool peel = n == 2 || n == 3;
       for (int v : t.v) peel = peel && !touched[std::size_t(v)];
+      double size = 1.0;  // against max_flatness
       if (peel && n == 2) {
         // The two inner faces share the edge of the nodes opposite the surface faces; it becomes
         // a surface edge, so it must not be one already (the surface stays manifold).
@@ -97,13 +106,20 @@ int peel_flat_caps(TetMesh& m, double max_flatness) {
         for (int k = 0; k < 4; ++k)
           if (on_boundary[k]) (a < 0 ? a : b) = t.v[k];
         peel = !boundary_edges.count({std::min(a, b), std::max(a, b)});
+        size = flatness(m, t, scale);
       } else if (peel && n == 3) {
-        // The node shared by the three surface faces leaves with the element; held by another
-        // element it would pinch the surface.
+        // An ear: the node shared by the three surface faces leaves with the element (held by
+        // another element it would pinch the surface). That node has no other support, so a
+        // push turns the element inside out whatever its shape: an ear is peeled when it
+        // stands lower than the share of the surface's median edge, a bump below the
+        // surface's own detail.
         for (int k = 0; k < 4; ++k)
-          if (!on_boundary[k]) peel = uses[std::size_t(t.v[k])] == 1;
+          if (!on_boundary[k]) {
+            peel = uses[std::size_t(t.v[k])] == 1;
+            size = tip_height(m, t, k) / scale;
+          }
       }
-      if (peel && flatness(m, t, scale) < max_flatness) {
+      if (peel && size < max_flatness) {
         for (int v : t.v) touched[std::size_t(v)] = 1;
         ++now;
       } else {

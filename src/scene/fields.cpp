@@ -501,11 +501,13 @@ const ObjectTable& body_table() {
           .constraint("0 or at least " + format_number(kMinTetgenQuality))
           .number("peel_caps", &BodySpec::peel_caps, "-", Range().ge(0).lt(0.8),
                   "Surface meshes: remove the flat caps TetGen leaves where the surface is "
-                  "nearly flat or ends in a thin lip (elements with two or three faces on it "
-                  "whose smallest height is under this share of their longest edge or of the "
+                  "nearly flat or ends in a thin lip (elements with two faces on it whose "
+                  "smallest height is under this share of their longest edge or of the "
                   "surface's median edge, whichever is shorter), which a floor pressed on "
-                  "them flattens to zero volume; 0.3 catches them (the paper's bunny), 0 "
-                  "keeps TetGen's mesh as it is.")
+                  "them flattens to zero volume, and its ears (elements with three faces on "
+                  "it whose tip nothing else holds, lower than this share of the median "
+                  "edge); 0.3 catches them (the paper's bunny), 0 keeps TetGen's mesh as it "
+                  "is.")
           .object("material", &BodySpec::material, material_table(),
                   "Elastic material; see `bodies[].material`.")
           .vec3("velocity", &BodySpec::velocity, "m/s", "Initial velocity of the free nodes.")
