@@ -640,12 +640,16 @@ class RayCouplingT final : public RayCoupling {
       if (pass == 0) stats_.ms_leak_check += ms_since(t0);
       if (crossed == 0 || pass == kPasses - 1) break;
       const Vec3* nx = x_new;
+      // A particle that meets a face again after being put a skin in front of one sits where
+      // two faces have closed to less than a skin (a fold, a pocket): each pass puts it at half
+      // the last distance, so it comes to fit the gap instead of going back and forth.
+      const Real put = skin / Real(1 << pass);
       parallel_for(ex_, n, [=] SPHFEM_LAMBDA(int i) {
         if (face[i] < 0) return;
         const Tri tr = tris[face[i]];
         const Vec3 p0 = nx[tr.v[0]], p1 = nx[tr.v[1]], p2 = nx[tr.v[2]];
         const Vec3 c = p0 * (Real(1) - hu[i] - hv[i]) + p1 * hu[i] + p2 * hv[i];
-        const Real away = side && side[i] < 0 ? -skin : skin;
+        const Real away = side && side[i] < 0 ? -put : put;
         x[i] = c + couple::face_normal(p0, p1, p2) * away;
       });
       exec_sync(ex_);
