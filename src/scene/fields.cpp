@@ -617,9 +617,10 @@ const ObjectTable& fem_table() {
                   "surface edge at rest.")
           .integer("contact_halvings", &FemSpec::contact_halvings, "-", Range().ge(0).le(6),
                    "With `contact`: when surfaces met deeper than half the rest height of the "
-                   "elements at the pair, the bodies' step is taken again in two halves, each "
-                   "of which may halve again, this many times at most (the shortest body step "
-                   "is the step / 2^n); 0 never halves.")
+                   "elements at the pair, or the step turned an element inside out, the "
+                   "bodies' step is taken again in two halves, each of which may halve again, "
+                   "this many times at most (the shortest body step is the step / 2^n); 0 "
+                   "never halves.")
           .build();
   return t;
 }

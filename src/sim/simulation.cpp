@@ -196,17 +196,27 @@ void Simulation::step_bodies(double dt) {
 }
 
 // [t0, t0 + dt] in one implicit step, or, when its surface contact found a pair deeper than
-// kHalvingDepth of the rest height of the pair's elements, again from its start in two
-// halves, each of which may halve again (fem.contact_halvings times). A push of a node through most of its
-// own element's height turns the element inside out: two soft balls closing at 4 m/s in
-// steps of 1.33 ms left 46 elements inverted, in steps of 0.33 ms none. The fluid's impulses
-// for the step are in the saved state, so the first half takes them. `step` gathers the
-// contact of the halves kept: the most pairs, the smallest gap, the deepest pair.
+// kHalvingDepth of the rest height of the pair's elements or the step left more elements
+// inside out than it began with, again from its start in two halves, each of which may halve
+// again (fem.contact_halvings times). A push of a node through most of its own element's
+// height turns the element inside out: two soft balls closing at 4 m/s in steps of 1.33 ms
+// left 46 elements inverted, in steps of 0.33 ms none; the bunny's fold, closing on itself,
+// still turned two small elements at a depth within bounds, which a shorter step does not.
+// The fluid's impulses for the step are in the saved state, so the first half takes them.
+// `step` gathers the contact of the halves kept: the most pairs, the smallest gap, the
+// deepest pair.
 void Simulation::step_bodies_span(double t0, double dt, int halvings, ContactStats& step) {
   const BodyContactTally tally = tally_;
   step_bodies_once(t0, dt);
-  if (contact_ && halvings < scene_.fem.contact_halvings &&
-      last_contact_.depth_ratio > kHalvingDepth) {
+  const bool may_halve = contact_ && halvings < scene_.fem.contact_halvings;
+  bool turned = false;
+  if (may_halve) {
+    BodySnapshot s;
+    bodies_->snapshot(s);
+    const int now = inverted_elements(*bodies_model_, s.x);
+    turned = now > 0 && now > inverted_elements(*bodies_model_, step_start_.x);
+  }
+  if (may_halve && (last_contact_.depth_ratio > kHalvingDepth || turned)) {
     tally_ = tally;  // the step not kept counts for nothing but the halving
     ++tally_.halvings;
     bodies_->load(step_start_);

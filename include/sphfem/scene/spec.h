@@ -153,7 +153,7 @@ struct FemSpec {
   double friction = FemSettings{}.friction;  // Coulomb, nodes on walls, obstacles, surfaces
   bool contact = false;                      // surfaces meet each other and themselves
   double contact_gap = 0;                    // m, kept between touching surfaces; 0: auto
-  int contact_halvings = 3;  // a body step met too deep is taken again in halves, this deep
+  int contact_halvings = 4;  // a body step met too deep is taken again in halves, this deep
 };
 
 enum class CouplingMethod { RayTraced, BoundaryParticles };
