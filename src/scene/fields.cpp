@@ -610,8 +610,10 @@ const ObjectTable& fem_table() {
                    "Body surfaces meet each other and themselves (a fold, two balls): "
                    "vertex-face and edge-edge contact after each step, pushed apart to "
                    "`contact_gap` with inelastic impulses and `friction`, and the step taken "
-                   "again with the contact's impulses. Experimental: where surfaces close on "
-                   "water, particles still pass between them (docs/validation.md).")
+                   "again with the contact's impulses (in halves where the surfaces met too "
+                   "deep, `contact_halvings`). On in the paper's bunny and heavy soft tube, "
+                   "which fold onto themselves; off by default, as it costs a search of the "
+                   "surfaces every step (docs/validation.md).")
           .number("contact_gap", &FemSpec::contact_gap, "m", kNonNegative,
                   "Distance kept between touching surfaces; 0 is a tenth of the median "
                   "surface edge at rest.")
