@@ -1,8 +1,9 @@
-// Flat boundary caps: tetrahedra lying in the skin of a nearly flat stretch of surface (all
-// four nodes on it). A contact plane pressed onto that stretch puts all four nodes on the
+// Flat boundary caps and ears. A cap lies in the skin of a nearly flat stretch of surface (all
+// four nodes on it): a contact plane pressed onto that stretch puts all four nodes on the
 // plane and the element at zero volume, whatever the material; TetGen leaves such caps where
 // a scanned surface is almost flat, and its quality bound does not remove them (the bunny's
-// base keeps 6-8 at any radius-edge or dihedral bound).
+// base keeps 6-8 at any radius-edge or dihedral bound). An ear's tip is held by it alone, so
+// a contact push turns it inside out.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -27,30 +28,24 @@ FaceKey face_key(const Tet& t, int k) {
   return f;
 }
 
-// Smallest height of the tetrahedron over the smaller of its longest edge and `scale`: 0.82
-// for a regular one (of edges up to `scale`), 0 flat.
-double flatness(const TetMesh& m, const Tet& t, double scale) {
-  double edge = 0;
-  for (int a = 0; a < 4; ++a)
-    for (int b = a + 1; b < 4; ++b) edge = std::max(edge, norm(m.x[t.v[a]] - m.x[t.v[b]]));
-  const double six_v =
-      std::fabs(6.0 * tet_volume(m.x[t.v[0]], m.x[t.v[1]], m.x[t.v[2]], m.x[t.v[3]]));
-  double height = edge;
-  for (int k = 0; k < 4; ++k) {
-    const Vec3d& a = m.x[t.v[kFace[k][0]]];
-    const double area2 = norm(cross(m.x[t.v[kFace[k][1]]] - a, m.x[t.v[kFace[k][2]]] - a));
-    if (area2 > 0) height = std::min(height, six_v / area2);
-  }
-  edge = std::min(edge, scale);
-  return edge > 0 ? height / edge : 0.0;
-}
-
 // Height of node k over the face opposite it.
 double tip_height(const TetMesh& m, const Tet& t, int k) {
   const Vec3d& a = m.x[t.v[kFace[k][0]]];
   const Vec3d n = cross(m.x[t.v[kFace[k][1]]] - a, m.x[t.v[kFace[k][2]]] - a);
   const double area2 = norm(n);
   return area2 > 0 ? std::fabs(dot(m.x[t.v[k]] - a, n)) / area2 : 0.0;
+}
+
+// Smallest height of the tetrahedron over the smaller of its longest edge and `scale`: 0.82
+// for a regular one (of edges up to `scale`), 0 flat.
+double flatness(const TetMesh& m, const Tet& t, double scale) {
+  double edge = 0;
+  for (int a = 0; a < 4; ++a)
+    for (int b = a + 1; b < 4; ++b) edge = std::max(edge, norm(m.x[t.v[a]] - m.x[t.v[b]]));
+  double height = edge;
+  for (int k = 0; k < 4; ++k) height = std::min(height, tip_height(m, t, k));
+  edge = std::min(edge, scale);
+  return edge > 0 ? height / edge : 0.0;
 }
 
 }  // namespace

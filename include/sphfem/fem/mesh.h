@@ -69,11 +69,13 @@ void validate_mesh(const TetMesh& m, const char* what);
 // fixed order (by tetrahedron, then local face).
 std::vector<Tri> boundary_faces(const std::vector<Tet>& tets);
 
-// Removes the flat caps of the boundary: elements with two or three faces on it whose smallest
-// height is under max_flatness times their longest edge (0.82 for a regular tetrahedron), in
-// passes until none is left, keeping the surface closed and manifold; nodes no element holds
-// any more are dropped. A contact plane pressed on a nearly flat stretch of surface flattens
-// such an element to zero volume. Returns the number removed (0 when max_flatness <= 0).
+// Removes the flat caps and ears of the boundary: elements with two faces on it whose smallest
+// height is under max_flatness times the smaller of their longest edge and the surface's
+// median edge (0.82 for a regular tetrahedron), and elements with three whose tip no other
+// element holds and stands lower than max_flatness times the median edge; in passes until
+// none is left, keeping the surface closed and manifold; the ears' tips are dropped. A contact
+// plane pressed on a nearly flat stretch of surface flattens a cap to zero volume, and a push
+// on an ear's tip turns it inside out. Returns the number removed (0 when max_flatness <= 0).
 int peel_flat_caps(TetMesh& m, double max_flatness);
 
 // Volume enclosed by a closed, outward-oriented triangle surface (divergence theorem).
