@@ -159,6 +159,27 @@ SurfaceContact::SurfaceContact(const BodiesModel& m, const ContactSettings& s) {
       l = std::max(l, norm(x0_[tris_[f].v[k]] - x0_[tris_[f].v[(k + 1) % 3]]));
     face_edge_[f] = l;
   }
+  // The surface graph: each node's neighbours along surface edges, sorted.
+  ring_start_.assign(std::size_t(m.nodes) + 1, 0);
+  for (const std::array<int, 2>& e : edges_) ++ring_start_[e[0] + 1], ++ring_start_[e[1] + 1];
+  for (int i = 0; i < m.nodes; ++i) ring_start_[i + 1] += ring_start_[i];
+  ring_.resize(std::size_t(ring_start_.back()));
+  {
+    std::vector<int> at(ring_start_.begin(), ring_start_.end() - 1);
+    for (const std::array<int, 2>& e : edges_) ring_[at[e[0]]++] = e[1], ring_[at[e[1]]++] = e[0];
+    for (int i = 0; i < m.nodes; ++i)
+      std::sort(ring_.begin() + ring_start_[i], ring_.begin() + ring_start_[i + 1]);
+  }
+  node_face_start_.assign(std::size_t(m.nodes) + 1, 0);
+  for (const Tri& t : tris_)
+    for (int k = 0; k < 3; ++k) ++node_face_start_[t.v[k] + 1];
+  for (int i = 0; i < m.nodes; ++i) node_face_start_[i + 1] += node_face_start_[i];
+  node_faces_.resize(std::size_t(node_face_start_.back()));
+  {
+    std::vector<int> at(node_face_start_.begin(), node_face_start_.end() - 1);
+    for (std::size_t f = 0; f < tris_.size(); ++f)
+      for (int k = 0; k < 3; ++k) node_faces_[at[tris_[f].v[k]]++] = int(f);
+  }
   edge_face_.assign(edges_.size(), -1);
   for (std::size_t f = tris_.size(); f-- > 0;)
     for (int e : tri_edges_[f]) edge_face_[e] = int(f);
@@ -246,26 +267,86 @@ void SurfaceContact::refit(const std::vector<Vec3>& x_old, const std::vector<Vec
   }
 }
 
-// Same-body pairs closer at rest than three gaps or the longer rest edge of the two never
-// count: a surface squeezed along itself brings a vertex within the gap of a face one or two
-// rings away, and pushing it off its own sheet wrinkles the surface and inverts elements.
-// Pair (p, f) as in Pair; the radius is scaled by shrink (the near list keeps a margin).
-bool SurfaceContact::rest_neighbours(int p, int f, Real shrink) const {
+// Nodes a and b at most two surface edges apart.
+bool SurfaceContact::two_rings(int a, int b) const {
+  if (a == b) return true;
+  const int *A = ring_.data() + ring_start_[a], *Ae = ring_.data() + ring_start_[a + 1];
+  const int *B = ring_.data() + ring_start_[b], *Be = ring_.data() + ring_start_[b + 1];
+  if (std::binary_search(A, Ae, b)) return true;
+  while (A != Ae && B != Be) {  // a common neighbour
+    if (*A == *B) return true;
+    *A < *B ? ++A : ++B;
+  }
+  return false;
+}
+
+// Same-body pairs closer at rest than three gaps never count (kNever). Nor do those closer
+// than the longer rest edge of the two with a node of one at most two surface edges from a
+// node of the other (kSheet), unless the surface has folded so that their sides face each other
+// (facing): a surface squeezed along itself brings a vertex within the gap of a face one or two
+// rings away, and pushing it off its own sheet wrinkles the surface and inverts elements, but a
+// wall buckled into a crease presses its neighbouring rings together and must hold them apart. Pair
+// (p, f) as in Pair; the radii are scaled by shrink (the near list keeps a margin).
+SurfaceContact::Rest SurfaceContact::rest_neighbours(int p, int f, Real shrink) const {
   if (f >= 0) {
-    if (node_body_[p] != tri_body_[f]) return false;
+    if (node_body_[p] != tri_body_[f]) return kApart;
     const Tri& t = tris_[f];
     const Vec3 q =
         collide::closest_on_triangle(x0_[p], x0_[t.v[0]], x0_[t.v[1]], x0_[t.v[2]]).point;
-    const Real r = shrink * std::max(Real(3 * gap_), face_edge_[f]);
-    return norm2(x0_[p] - q) < r * r;
+    const Real d2 = norm2(x0_[p] - q), g = shrink * Real(3 * gap_), r = shrink * face_edge_[f];
+    if (d2 < g * g) return kNever;
+    if (d2 < r * r && (two_rings(p, t.v[0]) || two_rings(p, t.v[1]) || two_rings(p, t.v[2])))
+      return kSheet;
+    return kApart;
   }
   const std::array<int, 2>&E = edges_[p], &G = edges_[-f - 1];
-  if (node_body_[E[0]] != node_body_[G[0]]) return false;
+  if (node_body_[E[0]] != node_body_[G[0]]) return kApart;
   Real s, t;
-  const Vec3 d = between_edges(x0_, E, G, s, t);
-  const Real r =
-      shrink * std::max({Real(3 * gap_), norm(x0_[E[1]] - x0_[E[0]]), norm(x0_[G[1]] - x0_[G[0]])});
-  return norm2(d) < r * r;
+  const Real d2 = norm2(between_edges(x0_, E, G, s, t)), g = shrink * Real(3 * gap_);
+  if (d2 < g * g) return kNever;
+  const Real r = shrink * std::max(norm(x0_[E[1]] - x0_[E[0]]), norm(x0_[G[1]] - x0_[G[0]]));
+  if (d2 < r * r && (two_rings(E[0], G[0]) || two_rings(E[0], G[1]) || two_rings(E[1], G[0]) ||
+                     two_rings(E[1], G[1])))
+    return kSheet;
+  return kApart;
+}
+
+// Whether the surface around pair (p, f) has turned its two sides toward each other at x: a
+// face around the vertex (or of the edge) and the face (or a face of the other edge) whose
+// normals point against each other, by a cosine half a unit lower than at rest and below 0.
+// A sheet squeezed along itself keeps its normals together, and a crevice of the rest shape
+// keeps its own angle; a crease, or a corner crushed to an acute angle, closes them.
+bool SurfaceContact::facing(int p, int f, const std::vector<Vec3>& x) const {
+  auto normal = [&](const std::vector<Vec3>& y, int t) {
+    const Tri& T = tris_[t];
+    return cross(y[T.v[1]] - y[T.v[0]], y[T.v[2]] - y[T.v[0]]);
+  };
+  auto cosine = [](const Vec3& a, const Vec3& b) {
+    const Real l = norm(a) * norm(b);
+    return l > Real(0) ? dot(a, b) / l : Real(1);
+  };
+  auto against = [&](const int* a, const int* ae, const int* b, const int* be) {
+    for (const int* i = a; i != ae; ++i)
+      for (const int* j = b; j != be; ++j) {
+        const Real now = cosine(normal(x, *i), normal(x, *j));
+        if (now < Real(0) && now < cosine(normal(x0_, *i), normal(x0_, *j)) - Real(0.5))
+          return true;
+      }
+    return false;
+  };
+  if (f >= 0)
+    return against(node_faces_.data() + node_face_start_[p],
+                   node_faces_.data() + node_face_start_[p + 1], &f, &f + 1);
+  const int g = -f - 1;
+  return against(
+      edge_faces_.data() + edge_face_start_[p], edge_faces_.data() + edge_face_start_[p + 1],
+      edge_faces_.data() + edge_face_start_[g], edge_faces_.data() + edge_face_start_[g + 1]);
+}
+
+// Whether pair (p, f) may count at x, as far as rest neighbours go.
+bool SurfaceContact::may_touch(int p, int f, const std::vector<Vec3>& x) const {
+  const Rest r = rest_neighbours(p, f, Real(1));
+  return r == kApart || (r == kSheet && facing(p, f, x));
 }
 
 // Vertex p is in contact with face f when it lies within the gap in front of the face, or
@@ -273,7 +354,7 @@ bool SurfaceContact::rest_neighbours(int p, int f, Real shrink) const {
 // motion the two share crosses nothing), unless it started the step behind the
 // face and over it (then it is inside for another reason and must not be pulled through; a
 // vertex beside the face, behind its plane, may slide under it within a step on a wavy
-// surface). Faces that touch p, or are its rest neighbours, never count.
+// surface). Faces that touch p never count, nor its rest neighbours unless folded to face it.
 bool SurfaceContact::vertex_face(int p, int f, const std::vector<Vec3>& x_old,
                                  const std::vector<Vec3>& x) const {
   const Tri& t = tris_[f];
@@ -289,10 +370,10 @@ bool SurfaceContact::vertex_face(int p, int f, const std::vector<Vec3>& x_old,
     for (int k = 0; k < 3; ++k) rel = std::max(rel, norm(dp - (x[t.v[k]] - x_old[t.v[k]])));
     if (-e.d > rel + g) return false;
   }
-  return !rest_neighbours(p, f, Real(1));
+  return may_touch(p, f, x);
 }
 
-// Edges e and g (sharing no node, not rest neighbours)
+// Edges e and g (sharing no node, not rest neighbours unfolded)
 // are in contact when their closest points, inside both, lie within the gap along the
 // direction that separated them at the step's start, or behind it no deeper than one edge's
 // nodes moved relative to the other's. Ends of edges are the vertex-face test's.
@@ -317,7 +398,7 @@ bool SurfaceContact::edge_edge(int e, int g, const std::vector<Vec3>& x_old,
       for (int b : G) rel = std::max(rel, norm((x[a] - x_old[a]) - (x[b] - x_old[b])));
     if (-d > rel + gap) return false;
   }
-  return !rest_neighbours(e, -g - 1, Real(1));
+  return may_touch(e, -g - 1, x);
 }
 
 // The pair at positions x: its nodes, their weights (+ on the side the normal points to), the
@@ -413,7 +494,7 @@ void SurfaceContact::list_near(const std::vector<Vec3>& x_old, const std::vector
         if (t.v[0] == p || t.v[1] == p || t.v[2] == p) return;
         const Vec3 q = collide::closest_on_triangle(x[p], x[t.v[0]], x[t.v[1]], x[t.v[2]]).point;
         if (!(norm2(x[p] - q) <= keep2)) return;
-        if (rest_neighbours(p, f, Real(0.99))) return;
+        if (rest_neighbours(p, f, Real(0.99)) == kNever) return;
         out.push_back({p, f, Vec3()});
       },
       [&](int e, int g, std::vector<Pair>& out) {
@@ -421,7 +502,7 @@ void SurfaceContact::list_near(const std::vector<Vec3>& x_old, const std::vector
         if (E[0] == G[0] || E[0] == G[1] || E[1] == G[0] || E[1] == G[1]) return;
         Real s, t;
         if (!(norm2(between_edges(x, E, G, s, t)) <= keep2)) return;
-        if (rest_neighbours(e, -g - 1, Real(0.99))) return;
+        if (rest_neighbours(e, -g - 1, Real(0.99)) == kNever) return;
         out.push_back({e, -g - 1, Vec3()});
       });
   near_.clear();

@@ -82,13 +82,19 @@ class SurfaceContact {
   bool edge_edge(int e, int g, const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
                  Vec3& n) const;
   bool contact(const Pair& c, const std::vector<Vec3>& x, Contact& out) const;
-  bool rest_neighbours(int p, int f, Real shrink) const;
+  enum Rest { kApart, kSheet, kNever };  // how a same-body pair lay at rest (contact.cpp)
+  Rest rest_neighbours(int p, int f, Real shrink) const;
+  bool two_rings(int a, int b) const;
+  bool facing(int p, int f, const std::vector<Vec3>& x) const;
+  bool may_touch(int p, int f, const std::vector<Vec3>& x) const;
 
   std::vector<Vec3> x0_;  // rest positions: same-body faces near a vertex at rest never count
   std::vector<Tri> tris_;
   std::vector<Real> face_edge_;  // each face's longest edge at rest
   std::vector<int> tri_body_, node_body_, verts_;
-  std::vector<std::array<int, 2>> edges_;  // unique surface edges
+  std::vector<std::array<int, 2>> edges_;          // unique surface edges
+  std::vector<int> ring_start_, ring_;             // each node's surface neighbours, sorted
+  std::vector<int> node_face_start_, node_faces_;  // each node's surface faces
   std::vector<std::array<int, 3>> tri_edges_;
   std::vector<Real> inv_mass_;  // 0 on pinned nodes
   std::vector<Real> height_;    // per node, its least height over an element's opposite face
