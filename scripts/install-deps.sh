@@ -8,7 +8,7 @@ packages=(
   build-essential cmake pkg-config git
   libgtest-dev libgmock-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev zlib1g-dev
-  libassimp-dev libtet1.5-dev
+  libassimp-dev libtet1.5-dev libeigen3-dev
   # Rendering: EGL (headless, surfaceless platform) and OpenGL through Mesa's llvmpipe,
   # libepoxy to load GL entry points, GLFW for `sphfem view`, ffmpeg for MP4 videos.
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libepoxy-dev libglfw3-dev ffmpeg

@@ -13,8 +13,10 @@ struct BenchOptions {
   std::string backend = "cpu";
   std::string out_dir;
   bool fem = false;
-  std::string mesh;      // --fem: surface to tetrahedralise; empty = the fetched bunny
-  bool resting = false;  // --fem: only the bunny resting on the floor (fem_contact.csv)
+  std::string mesh;        // --fem: surface to tetrahedralise; empty = the fetched bunny
+  bool resting = false;    // --fem: only the bunny resting on the floor (fem_contact.csv)
+  double young = 1e5;      // --fem: Young's modulus of the bodies, Pa
+  bool two_level = false;  // --fem: the CG's coarse level (fem.preconditioner two_level)
   bool paper = false;
   std::string method = "all";  // --paper: raytraced, raytraced_paper, boundary_particles, both, all
   std::string scenes;          // --paper: folder of the paper's scenes (default scenes/paper)

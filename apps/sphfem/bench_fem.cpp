@@ -97,14 +97,15 @@ TetMesh mesh_near(const SurfaceMesh& s, long target, std::string& switches,
   return best;
 }
 
-Result run_case(const Case& c, Backend backend, int steps) {
-  Material mat;  // soft rubber: density 1000 kg/m^3, E 100 kPa, nu 0.3
-  mat.density = 1000.0, mat.young = 1e5, mat.poisson = 0.3;
+Result run_case(const Case& c, Backend backend, int steps, double young, bool two_level) {
+  Material mat;  // rubber: density 1000 kg/m^3, E 100 kPa (soft) unless --young, nu 0.3
+  mat.density = 1000.0, mat.young = young, mat.poisson = 0.3;
   // The bottom 5 % pinned: gravity keeps the body deforming, so CG has real work each step.
   const auto [lo, hi] = bounds(c.mesh.x);
   const double cut = lo.y + 0.05 * (hi.y - lo.y);
   const auto pinned = pin_nodes(c.mesh, [&](const Vec3d& x) { return x.y <= cut; });
-  const FemSettings set;  // the solver's defaults, as a scene without a `fem` section gets
+  FemSettings set;  // the solver's defaults, as a scene without a `fem` section gets
+  set.two_level = two_level;
   malloc_trim(0);
   const double heap0 = heap_held_bytes();
   auto solver = make_body_solver(std::make_shared<const BodiesModel>(compile_bodies(
@@ -220,18 +221,21 @@ int run_fem_bench(const BenchOptions& opt) {
             [](const Case& a, const Case& b) { return a.mesh.tets.size() < b.mesh.tets.size(); });
 
   std::printf(
-      "FEM benchmark on %s, %d threads, %s backend: implicit Euler, dt %g ms, E 100 kPa, "
+      "FEM benchmark on %s, %d threads, %s backend: implicit Euler, dt %g ms, E %g kPa, "
       "bottom 5 %% pinned, %d steps after %d warm-up\n\n",
-      device.c_str(), cpu_threads(), opt.backend.c_str(), kDt * 1e3, opt.steps, kWarmUp);
+      device.c_str(), cpu_threads(), opt.backend.c_str(), kDt * 1e3, opt.young / 1e3, opt.steps,
+      kWarmUp);
   std::printf("%-8s %7s %7s %9s %8s %7s   %-22s %s\n", "body", "tets", "nodes", "ms/step", "CG it",
               "B/tet", "paper GPU (Table 1)", "mesh");
   char line[1024];
   std::string csv;
+  // Rows of other than the default soft body and block Jacobi go to their own file.
+  const bool options = opt.young != 1e5 || opt.two_level;
   std::time_t now = std::time(nullptr);
   char date[32];
   std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
   for (const Case& c : cases) {
-    const Result r = run_case(c, backend, opt.steps);
+    const Result r = run_case(c, backend, opt.steps, opt.young, opt.two_level);
     const PaperRow& p = nearest_paper_row(r.tets);
     char paper[64];
     std::snprintf(paper, sizeof paper, "%s tets %5.1f ms", thousands(long(p.tets)).c_str(), p.ms);
@@ -240,19 +244,26 @@ int run_fem_bench(const BenchOptions& opt) {
     std::fflush(stdout);
     const double per = 1.0 / double(std::max(1L, r.prof.steps));
     std::snprintf(line, sizeof line,
-                  "%s,\"%s\",%d,%s,%s,%ld,%ld,%d,%g,%.3f,%.3f,%.3f,%.3f,%.3f,%.1f,%.0f,%.1f\n",
-                  date, device.c_str(), cpu_threads(), opt.backend.c_str(), r.body.c_str(), r.tets,
+                  "%s,\"%s\",%d,%s,%s,%ld,%ld,%d,%g,%.3f,%.3f,%.3f,%.3f,%.3f,%.1f,%.0f,%.1f", date,
+                  device.c_str(), cpu_threads(), opt.backend.c_str(), r.body.c_str(), r.tets,
                   r.nodes, opt.steps, kDt, r.prof.ms_rotations * per, r.prof.ms_assemble * per,
                   r.prof.ms_solve * per, r.prof.ms_integrate * per, r.ms, r.cg, p.tets, p.ms);
     csv += line;
+    if (options) {
+      std::snprintf(line, sizeof line, ",%g,%s", opt.young,
+                    opt.two_level ? "two_level" : "block_jacobi");
+      csv += line;
+    }
+    csv += "\n";
   }
   if (!cases.empty()) std::printf("peak RSS %.1f MB\n", peak_rss_bytes() / 1e6);
   if (!opt.out_dir.empty() && !cases.empty()) {
     std::printf("\n");
-    append_results(opt.out_dir, "fem.csv",
-                   "date,device,threads,backend,body,tets,nodes,steps,dt,ms_rotations,ms_assemble,"
-                   "ms_solve,ms_integrate,ms_step,cg_iterations,paper_tets,paper_gpu_ms",
-                   csv);
+    const std::string header =
+        "date,device,threads,backend,body,tets,nodes,steps,dt,ms_rotations,ms_assemble,"
+        "ms_solve,ms_integrate,ms_step,cg_iterations,paper_tets,paper_gpu_ms";
+    append_results(opt.out_dir, options ? "fem_options.csv" : "fem.csv",
+                   options ? header + ",young,preconditioner" : header, csv);
   }
   if (!bunny.tris.empty() && backend == Backend::Cpu) {
     // The same bunny at about 22k tetrahedra standing free on the floor, contact on and off.

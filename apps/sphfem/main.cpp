@@ -214,6 +214,14 @@ int main(int argc, char** argv) {
   bench->add_option("--mesh", bench_opt.mesh,
                     "--fem: closed surface to tetrahedralise (default build/assets/bunny.obj, "
                     "written by scripts/fetch-bunny.sh build/assets)");
+  bench
+      ->add_option(
+          "--young", bench_opt.young,
+          "--fem: Young's modulus of the bodies in Pa (default 100 kPa; 10 MPa for stiff rubber)")
+      ->check(CLI::PositiveNumber);
+  bench->add_flag("--two-level", bench_opt.two_level,
+                  "--fem: the CG with its coarse level (fem.preconditioner two_level); with "
+                  "--young, rows go to fem_options.csv");
   bench->add_flag("--resting", bench_opt.resting,
                   "--fem: only the bunny resting on the tank floor, surface contact off and on "
                   "(fem_contact.csv)");

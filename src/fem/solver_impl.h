@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "fem/coarse.h"
 #include "fem/stages.h"
 #include "fem/wall_stages.h"
 #include "sphfem/core/memory.h"
@@ -50,6 +51,8 @@ class BodySolverT final : public BodySolver {
     std::vector<Quat> q0(ne_, Quat::identity());
     upload(rot_, q0);
     rot_scratch_ = Buffer<Quat>(s, ne_);
+    if (s == MemSpace::Host && m.settings.two_level)
+      coarse_ = std::make_unique<fem::CoarseLevel>(m, fem::CoarseLevel::kCells);
   }
 
   const BodiesModel& model() const override { return *model_; }
@@ -79,6 +82,19 @@ class BodySolverT final : public BodySolver {
       });
       timed(prof_.ms_assemble, [&] {
         fem::preconditioner(ex_, e, nv, P_.data(), dt, pinv_.data());
+        // The coarse operator follows the rotations and dt; a few steps old, or for a step a
+        // little shorter, it still preconditions (any symmetric positive definite one does),
+        // so it is refactored every kEvery steps or when dt changed by a quarter. It is a
+        // cache, not state: a resumed run refactors at once, so it matches the uninterrupted
+        // one to the CG tolerance, not bit for bit.
+        if (coarse_ && k == 0 &&
+            (coarse_age_ >= fem::CoarseLevel::kEvery || !(dt < Real(1.25) * coarse_dt_) ||
+             !(dt > Real(0.75) * coarse_dt_))) {
+          coarse_dt_ = dt;
+          coarse_age_ = 0;
+          coarse_->factor(model_->tets, x_.data(), P_.data(), mu_vol_.data(), lambda_vol_.data(),
+                          beta_.data(), nv.mass, nv.alpha, dt, held_ ? wall_mask_.data() : nullptr);
+        }
         fem::element_forces(ex_, e, x_.data(), u, dt, P_.data(), fe_.data());
         fem::assemble_rhs(ex_, nv, fe_.data(), u, has_forces_ ? fext_.data() : kNone,
                           impulses ? impulse_.data() : kNone, k > 0 ? dv_.data() : kNone,
@@ -104,6 +120,7 @@ class BodySolverT final : public BodySolver {
     });
     t_ += dt_in;
     last_dt_ = dt;
+    ++coarse_age_;
     ++steps_;
     ++prof_.steps;
     prof_.cg_iterations += info.cg_iterations;
@@ -389,8 +406,9 @@ class BodySolverT final : public BodySolver {
     const FemSettings& S = model_->settings;
     Vec3* x = xb.data();
     // |b|^2 in the preconditioner's norm, the scale the tolerance is relative to.
-    const double bb =
+    double bb =
         fem::cg_start(ex_, n_, b_.data(), kNone, pinv_.data(), r_.data(), z_.data(), p_.data());
+    if (coarse_) bb += coarse_->add(r_.data(), z_.data(), p_.data(), nullptr);
     if (!(bb > 0.0) && !(mask && bb == 0.0)) {
       xb.zero();
       if (!(bb == 0.0)) throw_not_finite();
@@ -401,24 +419,29 @@ class BodySolverT final : public BodySolver {
       apply(dt, x, q_.data());
       rz = fem::cg_start(ex_, n_, b_.data(), q_.data(), pinv_.data(), r_.data(), z_.data(),
                          p_.data(), mask);
+      if (coarse_) rz += coarse_->add(r_.data(), z_.data(), p_.data(), mask);
       if (!(rz < bb) && !mask) {  // a worse start than zero: begin from zero
         xb.zero();
         rz =
             fem::cg_start(ex_, n_, b_.data(), kNone, pinv_.data(), r_.data(), z_.data(), p_.data());
+        if (coarse_) rz += coarse_->add(r_.data(), z_.data(), p_.data(), nullptr);
       }
     } else {
       xb.zero();
-      if (mask)
+      if (mask) {
         rz = fem::cg_start(ex_, n_, b_.data(), kNone, pinv_.data(), r_.data(), z_.data(), p_.data(),
                            mask);
+        if (coarse_) rz += coarse_->add(r_.data(), z_.data(), p_.data(), mask);
+      }
     }
     const double target = S.cg_tolerance * S.cg_tolerance * bb;
     int it = 0;
     while (rz > target && it < S.cg_max_iterations) {
       const double pq = apply(dt, p_.data(), q_.data());
       if (!(pq > 0.0)) break;  // converged to round-off, or a non-finite state
-      const double rz_new = fem::cg_update(ex_, n_, Real(rz / pq), p_.data(), q_.data(),
-                                           pinv_.data(), x, r_.data(), z_.data(), mask);
+      double rz_new = fem::cg_update(ex_, n_, Real(rz / pq), p_.data(), q_.data(), pinv_.data(), x,
+                                     r_.data(), z_.data(), mask);
+      if (coarse_) rz_new += coarse_->add(r_.data(), z_.data(), nullptr, mask);
       ++it;
       if (rz_new > target) fem::cg_direction(ex_, n_, Real(rz_new / rz), z_.data(), p_.data());
       rz = rz_new;
@@ -452,6 +475,9 @@ class BodySolverT final : public BodySolver {
   Buffer<int> inc_start_, inc_;
   Buffer<Vec3> x_, v_, dv_, delta_, u_, b_, r_, z_, p_, q_, impulse_, staging_, fext_;
   Buffer<fem::Sym3> pinv_;
+  std::unique_ptr<fem::CoarseLevel> coarse_;  // host only, when the settings ask for it
+  Real coarse_dt_ = 0;                        // the dt of the last factor (0: none yet)
+  int coarse_age_ = 0;                        // steps since it
   Buffer<Vec3> P_, fe_;
   Buffer<Quat> rot_, rot_scratch_;
   BodyProfile prof_;

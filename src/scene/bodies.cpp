@@ -190,6 +190,7 @@ BodiesModel compile_scene_bodies(const SceneSpec& s) {
   set.friction = s.fem.friction;
   set.cg_tolerance = s.fem.cg_tolerance;
   set.cg_max_iterations = s.fem.cg_max_iterations;
+  set.two_level = s.fem.preconditioner == FemPreconditioner::TwoLevel;
   set.rotation_iterations = s.fem.rotation_iterations;
   set.newton_iterations = s.fem.newton_iterations;
   try {

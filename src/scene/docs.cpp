@@ -164,7 +164,9 @@ std::string scene_format_markdown() {
         "against the tank's faces, 88 B per wall sample, 8 B per grid cell and 1 MiB of "
         "tables; 281 B per body node, 372 B per tetrahedron and 36 B per surface triangle "
         "(counted as two a node before meshing), with `fem.contact` 101 B, 16 B and 216 B more, "
-        "with fluid 16 B a node and 80 B a triangle more. For fluid with the tank's faces in "
+        "with fluid 16 B a node and 80 B a triangle more, with `fem.preconditioner` "
+        "`two_level` 17 B a node and its two dense matrices (16 B times the square of 6 "
+        "unknowns per 16 nodes, at most 52 MB). For fluid with the tank's faces in "
         "the rays, and for bodies alone, with contact or in water, this comes to 1.0-1.25 "
         "times what a run holds (`tests/scene_limits_test.cpp`).\n\n";
 

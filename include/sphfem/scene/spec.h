@@ -144,10 +144,13 @@ struct ObstacleSpec {
   Vec3d pivot;  // m, the point the path's rotations turn about
 };
 
+enum class FemPreconditioner { BlockJacobi, TwoLevel };
+
 // Settings of the FEM solve shared by all bodies; defaults are the solver's own.
 struct FemSpec {
   double cg_tolerance = FemSettings{}.cg_tolerance;
   int cg_max_iterations = FemSettings{}.cg_max_iterations;
+  FemPreconditioner preconditioner = FemPreconditioner::BlockJacobi;
   int newton_iterations = FemSettings{}.newton_iterations;
   int rotation_iterations = FemSettings{}.rotation_iterations;
   double friction = FemSettings{}.friction;  // Coulomb, nodes on walls, obstacles, surfaces
