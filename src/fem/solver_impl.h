@@ -406,9 +406,7 @@ class BodySolverT final : public BodySolver {
     const FemSettings& S = model_->settings;
     Vec3* x = xb.data();
     // |b|^2 in the preconditioner's norm, the scale the tolerance is relative to.
-    double bb =
-        fem::cg_start(ex_, n_, b_.data(), kNone, pinv_.data(), r_.data(), z_.data(), p_.data());
-    if (coarse_) bb += coarse_->add(r_.data(), z_.data(), p_.data(), nullptr);
+    const double bb = cg_start(kNone, nullptr);
     if (!(bb > 0.0) && !(mask && bb == 0.0)) {
       xb.zero();
       if (!(bb == 0.0)) throw_not_finite();
@@ -417,22 +415,14 @@ class BodySolverT final : public BodySolver {
     double rz = bb;
     if (warm) {
       apply(dt, x, q_.data());
-      rz = fem::cg_start(ex_, n_, b_.data(), q_.data(), pinv_.data(), r_.data(), z_.data(),
-                         p_.data(), mask);
-      if (coarse_) rz += coarse_->add(r_.data(), z_.data(), p_.data(), mask);
+      rz = cg_start(q_.data(), mask);
       if (!(rz < bb) && !mask) {  // a worse start than zero: begin from zero
         xb.zero();
-        rz =
-            fem::cg_start(ex_, n_, b_.data(), kNone, pinv_.data(), r_.data(), z_.data(), p_.data());
-        if (coarse_) rz += coarse_->add(r_.data(), z_.data(), p_.data(), nullptr);
+        rz = cg_start(kNone, nullptr);
       }
     } else {
       xb.zero();
-      if (mask) {
-        rz = fem::cg_start(ex_, n_, b_.data(), kNone, pinv_.data(), r_.data(), z_.data(), p_.data(),
-                           mask);
-        if (coarse_) rz += coarse_->add(r_.data(), z_.data(), p_.data(), mask);
-      }
+      if (mask) rz = cg_start(kNone, mask);
     }
     const double target = S.cg_tolerance * S.cg_tolerance * bb;
     int it = 0;
@@ -449,6 +439,15 @@ class BodySolverT final : public BodySolver {
     if (!std::isfinite(rz)) throw_not_finite();
     info.cg_iterations += it;
     info.cg_residual = std::sqrt(rz / bb);
+  }
+
+  // CG's start (fem::cg_start) from r = b - q (q null: x = 0), with the coarse level's part of
+  // z and p when there is one; returns r . z.
+  double cg_start(const Vec3* q, const std::uint8_t* mask) {
+    double rz =
+        fem::cg_start(ex_, n_, b_.data(), q, pinv_.data(), r_.data(), z_.data(), p_.data(), mask);
+    if (coarse_) rz += coarse_->add(r_.data(), z_.data(), p_.data(), mask);
+    return rz;
   }
 
   [[noreturn]] void throw_not_finite() const {
