@@ -205,6 +205,23 @@ SurfaceContact::SurfaceContact(const BodiesModel& m, const ContactSettings& s) {
       if (area2 > Real(0))
         height_[t.v[k]] = std::min(height_[t.v[k]], std::fabs(dot(x0_[t.v[k]] - a, n)) / area2);
     }
+  // The elements, their rest volumes and each node's elements, for the volume floor.
+  tets_ = m.tets;
+  rest_det_.resize(tets_.size());
+  for (std::size_t t = 0; t < tets_.size(); ++t) {
+    const int* v = tets_[t].v;
+    rest_det_[t] = dot(cross(x0_[v[1]] - x0_[v[0]], x0_[v[2]] - x0_[v[0]]), x0_[v[3]] - x0_[v[0]]);
+  }
+  node_tet_start_.assign(std::size_t(m.nodes) + 1, 0);
+  for (const Tet& t : tets_)
+    for (int v : t.v) ++node_tet_start_[v + 1];
+  for (int i = 0; i < m.nodes; ++i) node_tet_start_[i + 1] += node_tet_start_[i];
+  node_tets_.resize(std::size_t(node_tet_start_.back()));
+  {
+    std::vector<int> at(node_tet_start_.begin(), node_tet_start_.end() - 1);
+    for (std::size_t t = 0; t < tets_.size(); ++t)
+      for (int v : tets_[t].v) node_tets_[at[v]++] = int(t);
+  }
   box_ = m.settings.box;
   box_lo_ = Vec3(m.settings.box_lo);
   box_hi_ = Vec3(m.settings.box_hi);
@@ -689,6 +706,49 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
     for (int i = 0; i < 4; ++i) W += c.w[i] * c.w[i] * inv_mass_[c.node[i]];
     return W;
   };
+  // The volume floor: each element of a node a push moved (or a floor moved, in turn) keeps
+  // 6 V >= floor_det_, oriented as at rest: kKeepVolume of its rest volume, or what it had
+  // before the pushes if less. A unilateral constraint projected like a push (Müller et al.
+  // 2007's volume constraint): its gradients sum to zero, so it is momentum-free too.
+  watched_.assign(tets_.size(), 0);
+  floor_det_.resize(tets_.size());
+  squeezed_.clear();
+  auto oriented_det = [&](int t, const std::vector<Vec3>& y) {
+    const int* n = tets_[t].v;
+    const Real d = dot(cross(y[n[1]] - y[n[0]], y[n[2]] - y[n[0]]), y[n[3]] - y[n[0]]);
+    return rest_det_[t] < Real(0) ? -d : d;
+  };
+  auto watch = [&](int node) {
+    for (int k = node_tet_start_[node]; k < node_tet_start_[node + 1]; ++k) {
+      const int t = node_tets_[k];
+      if (watched_[t]) continue;
+      watched_[t] = 1;
+      squeezed_.push_back(t);
+      floor_det_[t] = std::min(Real(kKeepVolume) * std::fabs(rest_det_[t]), oriented_det(t, x_in));
+    }
+  };
+  bool floored = false;
+  auto keep_volume = [&](int t) {
+    const int* n = tets_[t].v;
+    const Real d = oriented_det(t, x);
+    if (!(d < floor_det_[t])) return;
+    const Real o = rest_det_[t] < Real(0) ? Real(-1) : Real(1);
+    const Vec3 e1 = x[n[1]] - x[n[0]], e2 = x[n[2]] - x[n[0]], e3 = x[n[3]] - x[n[0]];
+    Vec3 grad[4];
+    grad[1] = cross(e2, e3) * o, grad[2] = cross(e3, e1) * o, grad[3] = cross(e1, e2) * o;
+    grad[0] = -(grad[1] + grad[2] + grad[3]);
+    Real S = 0;
+    for (int i = 0; i < 4; ++i) S += inv_mass_[n[i]] * norm2(grad[i]);
+    if (!(S > Real(0))) return;
+    const Real lambda = (floor_det_[t] - d) / S;
+    floored = true;
+    for (int i = 0; i < 4; ++i) {
+      if (!(inv_mass_[n[i]] > Real(0))) continue;
+      x[n[i]] += grad[i] * (lambda * inv_mass_[n[i]]);
+      clamp(n[i]);
+      watch(n[i]);
+    }
+  };
   double area = 0;
   for (; st.rounds < rounds_; ++st.rounds) {
     refit(x_old, x);
@@ -698,16 +758,17 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
     for (const Pair& c : pairs)
       if (contact(c, x, k) && k.d < g * Real(0.999)) {
         violated = true;
-        if (st.rounds == 0) {
-          Real h = std::numeric_limits<Real>::max();
-          for (int i = 0; i < 4; ++i)
-            if (k.w[i] != Real(0)) h = std::min(h, height_[k.node[i]]);
-          st.depth_ratio = std::max(st.depth_ratio, double((g - k.d) / h));
-        }
+        Real h = std::numeric_limits<Real>::max();
+        for (int i = 0; i < 4; ++i)
+          if (k.w[i] != Real(0)) h = std::min(h, height_[k.node[i]]);
+        if (st.rounds == 0) st.depth_ratio = std::max(st.depth_ratio, double((g - k.d) / h));
       }
     if (!violated) break;
     touched.insert(touched.end(), pairs.begin(), pairs.end());
-    for (int s = 0; s < sweeps_; ++s)
+    // Pushes and volume floors pull against each other where a push reaches through an
+    // element: rounds where a floor acted sweep up to four times as often.
+    floored = false;
+    for (int s = 0; s < sweeps_ || (floored && s < 4 * sweeps_); ++s) {
       for (const Pair& c : pairs) {
         if (!contact(c, x, k) || !(k.d < g)) continue;
         const Real W = weight(k);
@@ -716,8 +777,11 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
         for (int i = 0; i < 4; ++i) {
           x[k.node[i]] += push * (k.w[i] * inv_mass_[k.node[i]]);
           clamp(k.node[i]);
+          if (k.w[i] != Real(0) && inv_mass_[k.node[i]] > Real(0)) watch(k.node[i]);
         }
       }
+      for (std::size_t t = 0; t < squeezed_.size(); ++t) keep_volume(squeezed_[t]);
+    }
   }
   // A deformed tree answers slowly: rebuild it over the current surface now and then.
   if (area > 2.0 * area0_) build_tree(x);

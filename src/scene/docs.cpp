@@ -163,7 +163,7 @@ std::string scene_format_markdown() {
         "particle with the ray coupling's rays (225 B with obstacles) and 220 B per contact "
         "against the tank's faces, 88 B per wall sample, 8 B per grid cell and 1 MiB of "
         "tables; 281 B per body node, 372 B per tetrahedron and 36 B per surface triangle "
-        "(counted as two a node before meshing), with `fem.contact` 101 B, 16 B and 216 B more, "
+        "(counted as two a node before meshing), with `fem.contact` 105 B, 57 B and 216 B more, "
         "with fluid 16 B a node and 80 B a triangle more, with `fem.preconditioner` "
         "`two_level` 17 B a node and its two dense matrices (16 B times the square of 6 "
         "unknowns per 16 nodes, at most 52 MB). For fluid with the tank's faces in "

@@ -128,12 +128,14 @@ double body_bytes(double nodes, double tets, double surface_triangles, bool cont
   // and its per-body nodes, inverse edge matrix and volume in double (96 B). Per surface
   // triangle 36 B: its nodes in the solver, the model and the body.
   // Surface contact: x0, reference and saved positions, the saved step's v, dv and impulses,
-  // body, inverse mass, rest height, flags and the starts of its surface neighbours and faces
-  // per node (101 B); the saved rotations per tet (16 B); per triangle the faces' edges, tree,
-  // leaves, query lists, near list and the surface graph's entries (216 B). With fluid: the
-  // coupling's and the leak check's trees (80 B a triangle) and node positions (16 B).
-  const double per_node = 281.0 + (contact ? 101.0 : 0.0) + (fluid ? 16.0 : 0.0);
-  const double per_tet = 372.0 + (contact ? 16.0 : 0.0);
+  // body, inverse mass, rest height, flags and the starts of its surface neighbours, faces
+  // and elements per node (105 B); per tet the saved rotations (16 B) and the volume floor's
+  // copy of its nodes, rest volume, floor, flag and node-to-element entries (41 B); per triangle
+  // the faces' edges, tree, leaves, query lists, near list and the surface graph's entries (216 B).
+  // With fluid: the coupling's and the leak check's trees (80 B a triangle) and node positions (16
+  // B).
+  const double per_node = 281.0 + (contact ? 105.0 : 0.0) + (fluid ? 16.0 : 0.0);
+  const double per_tet = 372.0 + (contact ? 57.0 : 0.0);
   const double per_tri = 36.0 + (contact ? 216.0 : 0.0) + (fluid ? 80.0 : 0.0);
   // The small tables of a run with bodies, whatever their size (per-thread pair lists, the
   // energy meter's sums).

@@ -98,6 +98,17 @@ class SurfaceContact {
   std::vector<std::array<int, 3>> tri_edges_;
   std::vector<Real> inv_mass_;  // 0 on pinned nodes
   std::vector<Real> height_;    // per node, its least height over an element's opposite face
+  // The pushes keep each element they squeeze at kKeepVolume of its rest volume at least (or
+  // what it had before them, if less): unilateral volume constraints swept with the contacts
+  // (resolve), so a push through a thin element's height moves the nodes behind it instead
+  // of turning the element inside out.
+  static constexpr double kKeepVolume = 0.2;
+  std::vector<Tet> tets_;
+  std::vector<Real> rest_det_;                   // per tet, 6 times its rest volume (signed)
+  std::vector<int> node_tet_start_, node_tets_;  // each node's elements
+  std::vector<int> squeezed_;                    // elements the pushes reached this step
+  std::vector<Real> floor_det_;                  // per tet, the least 6 V kept this step
+  std::vector<std::uint8_t> watched_;            // per tet, in squeezed_
   std::vector<collide::BvhNode> tree_;
   std::vector<int> prims_;
   // The queries grouped by the leaf that holds a face of theirs (a vertex's first face, an
