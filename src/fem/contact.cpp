@@ -706,11 +706,11 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
     for (int i = 0; i < 4; ++i) W += c.w[i] * c.w[i] * inv_mass_[c.node[i]];
     return W;
   };
-  // The volume floor: each element of a node a push moved (or a floor moved, in turn) keeps
+  // The volume floor: each element of a node pushed deeper than kDeepPush of its height keeps
   // 6 V >= floor_det_, oriented as at rest: kKeepVolume of its rest volume, or what it had
   // before the pushes if less. A unilateral constraint projected like a push (Müller et al.
   // 2007's volume constraint): its gradients sum to zero, so it is momentum-free too.
-  watched_.assign(tets_.size(), 0);
+  watched_.resize(tets_.size(), 0);  // all 0: each call clears what it set
   floor_det_.resize(tets_.size());
   squeezed_.clear();
   auto oriented_det = [&](int t, const std::vector<Vec3>& y) {
@@ -746,7 +746,6 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
       if (!(inv_mass_[n[i]] > Real(0))) continue;
       x[n[i]] += grad[i] * (lambda * inv_mass_[n[i]]);
       clamp(n[i]);
-      watch(n[i]);
     }
   };
   double area = 0;
@@ -777,12 +776,15 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
         for (int i = 0; i < 4; ++i) {
           x[k.node[i]] += push * (k.w[i] * inv_mass_[k.node[i]]);
           clamp(k.node[i]);
-          if (k.w[i] != Real(0) && inv_mass_[k.node[i]] > Real(0)) watch(k.node[i]);
+          if (k.w[i] != Real(0) && inv_mass_[k.node[i]] > Real(0) &&
+              g - k.d > Real(kDeepPush) * height_[k.node[i]])
+            watch(k.node[i]);
         }
       }
       for (std::size_t t = 0; t < squeezed_.size(); ++t) keep_volume(squeezed_[t]);
     }
   }
+  for (int t : squeezed_) watched_[t] = 0;
   // A deformed tree answers slowly: rebuild it over the current surface now and then.
   if (area > 2.0 * area0_) build_tree(x);
 

@@ -98,11 +98,11 @@ class SurfaceContact {
   std::vector<std::array<int, 3>> tri_edges_;
   std::vector<Real> inv_mass_;  // 0 on pinned nodes
   std::vector<Real> height_;    // per node, its least height over an element's opposite face
-  // The pushes keep each element they squeeze at kKeepVolume of its rest volume at least (or
-  // what it had before them, if less): unilateral volume constraints swept with the contacts
-  // (resolve), so a push through a thin element's height moves the nodes behind it instead
-  // of turning the element inside out.
-  static constexpr double kKeepVolume = 0.2;
+  // A node pushed deeper than kDeepPush of its height keeps each of its elements at
+  // kKeepVolume of its rest volume at least (or what it had before the pushes, if less):
+  // unilateral volume constraints swept with the contacts (resolve), so a push through a thin
+  // element's height moves the nodes behind it instead of turning the element inside out.
+  static constexpr double kKeepVolume = 0.2, kDeepPush = 0.25;
   std::vector<Tet> tets_;
   std::vector<Real> rest_det_;                   // per tet, 6 times its rest volume (signed)
   std::vector<int> node_tet_start_, node_tets_;  // each node's elements
