@@ -757,10 +757,12 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
     for (const Pair& c : pairs)
       if (contact(c, x, k) && k.d < g * Real(0.999)) {
         violated = true;
-        Real h = std::numeric_limits<Real>::max();
-        for (int i = 0; i < 4; ++i)
-          if (k.w[i] != Real(0)) h = std::min(h, height_[k.node[i]]);
-        if (st.rounds == 0) st.depth_ratio = std::max(st.depth_ratio, double((g - k.d) / h));
+        if (st.rounds == 0) {
+          Real h = std::numeric_limits<Real>::max();
+          for (int i = 0; i < 4; ++i)
+            if (k.w[i] != Real(0)) h = std::min(h, height_[k.node[i]]);
+          st.depth_ratio = std::max(st.depth_ratio, double((g - k.d) / h));
+        }
       }
     if (!violated) break;
     touched.insert(touched.end(), pairs.begin(), pairs.end());
