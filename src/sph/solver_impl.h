@@ -114,8 +114,6 @@ class SolverT final : public FluidSolver {
     if (dfsph) {
       active_walls_ = stages::wall_density(ex_, P_, f, g, w.fixed);
       if (w.moving.n) active_walls_ += stages::wall_density(ex_, P_, f, g, w.moving);
-      stages::dfsph_smooth_warm(ex_, P_, f, g, w, fluid_.tmpr.data());
-      fluid_.warm_dens.swap(fluid_.tmpr);
       fluid_.p.zero();
     }
     exec_sync(ex_);
@@ -162,6 +160,11 @@ class SolverT final : public FluidSolver {
   void pressure(StepInfo& info) override {
     const Walls w = walls();
     if (model_.solver == SolverKind::DFSPH) {
+      // The smoothing keeps pace with the memory (stages::kDfsphWarmSmoothing).
+      const Real rate = Real(std::min(1.0, stages::kDfsphWarmSmoothing * warm_weight()));
+      stages::dfsph_smooth_warm(ex_, P_, view(), grid(fluid_.start.data()), w, rate,
+                                fluid_.tmpr.data());
+      fluid_.warm_dens.swap(fluid_.tmpr);
       info.pressure_iterations = solve(view(), grid(fluid_.start.data()), w, Real(dt_), pace_,
                                        false, model_.density_tolerance);
       info.density_error = last_error_;
@@ -416,9 +419,17 @@ class SolverT final : public FluidSolver {
       if ((err <= tol && it >= kMinSweeps) || it >= model_.max_iterations) break;
       apply();
     }
-    const Real memory = divergence ? Real(1) : stages::kDfsphMemory;
-    stages::dfsph_remember(ex_, f, memory * pace, divergence);
+    stages::dfsph_remember(ex_, f, divergence ? pace : Real(warm_weight()), divergence);
     return it;
+  }
+
+  // This step's weight in the density solve's running mean (stages::kDfsphWarmTime),
+  // bias-corrected: the mean starts from nothing at t = 0, so the first solves weigh more and
+  // the warm start holds the water's weight after about one mean's time, not several.
+  double warm_weight() const {
+    const double T = stages::kDfsphWarmTime;
+    const double filled = -std::expm1(-(t_ + dt_) / T);
+    return std::min(1.0, dt_ / T / std::max(filled, 1e-12));
   }
 
   int emit_layers(double dt) {

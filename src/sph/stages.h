@@ -561,12 +561,24 @@ int drift(Exec& ex, const SphParams P, FluidView f, Real dt, const Real* travel 
 // al. 2014, eq. 16).
 constexpr Real kDfsphOmega = Real(0.5);
 
-// Warm starts are running means over about 1 / kDfsphMemory steps of the stiffness summed per
-// solve. The last step's sum alone also holds that step's correction of its density error;
-// started from it, every step pushed the particles a second time and a resting tank kept
-// boiling (rms speed 0.1 m/s). The divergence solve has no such part and keeps its last sum.
-constexpr Real kDfsphMemory = Real(0.05);
-constexpr Real kDfsphWarmSmoothing = Real(0.3);  // per step, dfsph_smooth_warm
+// The density solve's warm start is a running mean over about kDfsphWarmTime seconds of the
+// stiffness summed per solve. The last step's sum alone also holds that step's correction of
+// its density error; started from it, every step pushed the particles a second time and a
+// resting tank kept boiling (rms speed 0.1 m/s). The divergence solve has no such part and
+// keeps its last sum.
+// The mean must also be slow: the sweeps hardly see a column's lowest mode (a nearly uniform
+// compression), so the warm start alone holds it, an integral controller on a mass. That is
+// stable only while its time exceeds the mode's own damping time: over 20 steps of 2 ms
+// (40 ms) and over 0.1 s a resting column breathed at ~30 Hz with a growing swing until the
+// tolerance capped it (docs/validation.md, "Soak"); over 0.2 s the swing decays. The weight
+// of a step is dt / kDfsphWarmTime, bias-corrected at the start (SolverT::warm_weight).
+constexpr double kDfsphWarmTime = 0.3;
+// Strength of dfsph_smooth_warm per unit of the running mean's weight: the filter takes out
+// what the memory lets in at a fixed ratio, so the warm start's bias at a surface without
+// samples (a one-sided average) stays the same however slow the mean: 0.3 a step at the old
+// weight 0.05 a step; kept at 0.3 a step when the mean slowed, the bottom pressure on a
+// triangle-mesh floor rose from -1 % to +9 %.
+constexpr double kDfsphWarmSmoothing = 6.0;
 
 // Coefficient of grad W_ib in a DFSPH velocity update of particle i from wall sample b: the
 // pair term psi_b / rho0 (kappa_i + kappa_b) of wall_source, symmetric like a fluid pair's.
@@ -703,13 +715,13 @@ int wall_density(Exec& ex, const SphParams P, const FluidView f, const GridView 
 }
 
 // Partial Shepard filter of the density solve's warm start, fluid and wall samples together:
-// warm_i += kDfsphWarmSmoothing (sum_j warm_j W_ij / sum_j W_ij - warm_i), into out. The sweeps
+// warm_i += rate (sum_j warm_j W_ij / sum_j W_ij - warm_i), into out. The sweeps
 // cannot see a stiffness that alternates layer by layer (on the lattice its SPH gradient
 // vanishes), so once in the warm start it stayed there and showed as a static +-5 % zigzag in
 // the pressure; the filter lets it decay while the smooth hydrostatic part passes unchanged.
 template <class Exec>
 void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const GridView g,
-                       const Walls w, Real* out) {
+                       const Walls w, Real rate, Real* out) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
     Real sw = 0, sk = 0;
@@ -725,7 +737,7 @@ void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const Gri
                        sk += wk * b.warm_dens[j];
                      });
     const Real own = f.warm_dens[i];
-    out[i] = own + kDfsphWarmSmoothing * (sk / sw - own);
+    out[i] = own + rate * (sk / sw - own);
   });
 }
 
@@ -765,8 +777,9 @@ void wall_warm_start(Exec& ex, const BoundaryView b, bool divergence) {
   });
 }
 
-// After a solve: warm += weight (kappa_sum - warm). The weight is scaled by dt / CFL step, so
-// a short step, whose corrections are impulses of size ~ 1 / dt, hardly moves the memory.
+// After a solve: warm += weight (kappa_sum - warm). The weight is scaled by the step's length
+// (dt / CFL step, dt / kDfsphWarmTime), so a short step, whose corrections are impulses of
+// size ~ 1 / dt, hardly moves the memory.
 template <class Exec>
 void dfsph_remember(Exec& ex, FluidView f, Real weight, bool divergence) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
