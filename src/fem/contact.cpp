@@ -19,6 +19,13 @@ namespace sphfem {
 
 namespace {
 
+// Six times the signed volume of element t at positions y: positive when its fourth node lies
+// on the side its first three's normal (y1 - y0) x (y2 - y0) points to.
+Real six_volume(const std::vector<Vec3>& y, const Tet& t) {
+  const int* v = t.v;
+  return dot(cross(y[v[1]] - y[v[0]], y[v[2]] - y[v[0]]), y[v[3]] - y[v[0]]);
+}
+
 using collide::BvhNode;
 
 Real box_area(const Vec3& lo, const Vec3& hi) {
@@ -208,10 +215,7 @@ SurfaceContact::SurfaceContact(const BodiesModel& m, const ContactSettings& s) {
   // The elements, their rest volumes and each node's elements, for the volume floor.
   tets_ = m.tets;
   rest_det_.resize(tets_.size());
-  for (std::size_t t = 0; t < tets_.size(); ++t) {
-    const int* v = tets_[t].v;
-    rest_det_[t] = dot(cross(x0_[v[1]] - x0_[v[0]], x0_[v[2]] - x0_[v[0]]), x0_[v[3]] - x0_[v[0]]);
-  }
+  for (std::size_t t = 0; t < tets_.size(); ++t) rest_det_[t] = six_volume(x0_, tets_[t]);
   node_tet_start_.assign(std::size_t(m.nodes) + 1, 0);
   for (const Tet& t : tets_)
     for (int v : t.v) ++node_tet_start_[v + 1];
@@ -714,8 +718,7 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
   floor_det_.resize(tets_.size());
   squeezed_.clear();
   auto oriented_det = [&](int t, const std::vector<Vec3>& y) {
-    const int* n = tets_[t].v;
-    const Real d = dot(cross(y[n[1]] - y[n[0]], y[n[2]] - y[n[0]]), y[n[3]] - y[n[0]]);
+    const Real d = six_volume(y, tets_[t]);
     return rest_det_[t] < Real(0) ? -d : d;
   };
   auto watch = [&](int node) {
@@ -835,13 +838,8 @@ long intersecting_pairs(const BodiesModel& m, const std::vector<Vec3>& x) {
 
 int inverted_elements(const BodiesModel& m, const std::vector<Vec3>& x) {
   int n = 0;
-  for (const Tet& t : m.tets) {
-    auto vol = [&](const std::vector<Vec3>& p) {
-      return dot(p[t.v[1]] - p[t.v[0]], cross(p[t.v[2]] - p[t.v[0]], p[t.v[3]] - p[t.v[0]]));
-    };
-    const Real rest = vol(m.x0), now = vol(x);
-    if (!(now * rest > Real(0))) ++n;
-  }
+  for (const Tet& t : m.tets)
+    if (!(six_volume(x, t) * six_volume(m.x0, t) > Real(0))) ++n;
   return n;
 }
 
