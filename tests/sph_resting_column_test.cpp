@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <vector>
 
 #include "sphfem/scene/compile.h"
 #include "sphfem/sph/solver.h"
@@ -21,7 +20,7 @@ SceneSpec column() {
   s.simulation.solver = SolverKind::DFSPH;
   s.simulation.dt_max = 2e-3;
   s.fluid.particle_radius = 0.004;
-  s.fluid.viscosity = 1e-5;  // too weak to damp the mode within the test: the solve must
+  s.fluid.viscosity = 1e-5;  // too weak to damp the mode within the test: the solver must
   s.domain.lo = Vec3d(0, 0, 0);
   s.domain.hi = Vec3d(0.096, 0.4, 0.096);
   s.fluid.blocks.push_back({Vec3d(0, 0, 0), Vec3d(0.096, 0.272, 0.096), Vec3d()});
@@ -40,7 +39,6 @@ TEST(SphRestingColumn, ComesToRest) {
   const double mass = double(m.params.mass) * sim->count();
   // Two windows after the column has settled onto the floor: 1.5-2 s and 2.5-3 s.
   Window early, late;
-  std::vector<Vec3> v;
   while (sim->time() < 3.0 - 1e-9) {
     sim->step(3.0 - sim->time());
     const double t = sim->time();
