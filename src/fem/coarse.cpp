@@ -2,8 +2,9 @@
 
 // Serial: Eigen's OpenMP products block by the thread count, which would change the bits.
 #define EIGEN_DONT_PARALLELIZE
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,9 +17,22 @@
 namespace sphfem {
 namespace fem {
 
+// P^T A P is sparse: a patch meets only the patches it shares an element with (about 15 on a
+// graded mesh). Stored as 6x6 blocks per pair of patches, factored by a sparse Cholesky in a
+// fill-reducing order: the dense factor of the bench's bunny (915 unknowns) read 6.7 MB twice
+// per CG iteration and took 0.3 G flops to refactor (docs/design.md, "Coarse level").
 struct CoarseLevel::Factor {
-  Eigen::MatrixXd a;
-  Eigen::LLT<Eigen::MatrixXd> llt;
+  std::vector<int> start, col;  // blocks of patch g: its neighbours col[start[g]..start[g+1])
+  std::vector<double> block;    // 36 per block, row-major: a(6 g + l, 6 h + k) at 6 l + k
+  Eigen::SparseMatrix<double> a;
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
+  bool analysed = false;
+  bool ok = false;
+
+  double* at(int g, int h) {
+    const auto first = col.begin() + start[g], last = col.begin() + start[g + 1];
+    return block.data() + 36 * (std::lower_bound(first, last, h) - col.begin());
+  }
 };
 
 CoarseLevel::CoarseLevel(const BodiesModel& m, double cells) : f_(std::make_unique<Factor>()) {
@@ -60,6 +74,21 @@ CoarseLevel::CoarseLevel(const BodiesModel& m, double cells) : f_(std::make_uniq
   held_.assign(std::size_t(nodes_), 0);
   y_.assign(std::size_t(size()), 0.0);
   c_.assign(std::size_t(size()), 0.0);
+  // Which patches share an element: the blocks of P^T A P.
+  std::vector<std::vector<int>> near(static_cast<std::size_t>(aggregates_));
+  for (int g = 0; g < aggregates_; ++g) near[g].push_back(g);
+  for (const Tet& t : m.tets)
+    for (int a : t.v)
+      for (int b : t.v)
+        if (agg_[a] >= 0 && agg_[b] >= 0 && agg_[a] != agg_[b]) near[agg_[a]].push_back(agg_[b]);
+  f_->start.assign(std::size_t(aggregates_) + 1, 0);
+  for (int g = 0; g < aggregates_; ++g) {
+    std::sort(near[g].begin(), near[g].end());
+    near[g].erase(std::unique(near[g].begin(), near[g].end()), near[g].end());
+    f_->start[g + 1] = f_->start[g] + int(near[g].size());
+    f_->col.insert(f_->col.end(), near[g].begin(), near[g].end());
+  }
+  f_->block.assign(std::size_t(36) * f_->col.size(), 0.0);
 }
 
 CoarseLevel::~CoarseLevel() = default;
@@ -90,16 +119,17 @@ void CoarseLevel::factor(const std::vector<Tet>& tets, const Vec3* x, const Vec3
     ++count[agg_[i]];
   }
   for (int g = 0; g < aggregates_; ++g) centre_[g] = Vec3(sum[g] / double(count[g]));
-  Eigen::MatrixXd& a = f_->a;
-  a.setZero(nc, nc);
+  Factor& F = *f_;
+  std::fill(F.block.begin(), F.block.end(), 0.0);
   for (int i = 0; i < nodes_; ++i) {
     const int g = agg_[i];
     if (g < 0) continue;
     const double m = double(mass[i]) * (1.0 + double(dt) * double(alpha[i]));
     Vec3 u[6];
     for (int k = 0; k < 6; ++k) u[k] = mode(i, k);
+    double* a = F.at(g, g);
     for (int k = 0; k < 6; ++k)
-      for (int l = 0; l < 6; ++l) a(6 * g + l, 6 * g + k) += m * double(dot(u[l], u[k]));
+      for (int l = 0; l < 6; ++l) a[6 * l + k] += m * double(dot(u[l], u[k]));
   }
   for (std::size_t t = 0; t < tets.size(); ++t) {
     const Tet& tet = tets[t];
@@ -119,30 +149,58 @@ void CoarseLevel::factor(const std::vector<Tet>& tets, const Vec3* x, const Vec3
         for (int c = 0; c < 4; ++c) {
           const int h = agg_[tet.v[c]];
           if (h < 0) continue;
-          for (int l = 0; l < 6; ++l)
-            a(6 * h + l, 6 * ag[gi] + k) += double(dot(mode(tet.v[c], l), out[c]));
+          double* a = F.at(h, ag[gi]);
+          for (int l = 0; l < 6; ++l) a[6 * l + k] += double(dot(mode(tet.v[c], l), out[c]));
         }
       }
   }
-  // Symmetric in exact arithmetic; average the round-off away before factoring.
-  a = 0.5 * (a + a.transpose()).eval();
-  f_->llt.compute(a);
-  if (f_->llt.info() != Eigen::Success) {
-    // A mode no node moves (an aggregate of collinear nodes): a tiny shift keeps it definite.
-    const double shift = 1e-9 * a.diagonal().maxCoeff();
-    a.diagonal().array() += shift;
-    f_->llt.compute(a);
+  // The lower triangle, symmetric in exact arithmetic: the round-off averaged away, column by
+  // column (patch h's six, then the patches g >= h it meets, in order).
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(F.block.size() / 2 + std::size_t(18) * aggregates_);
+  for (int h = 0; h < aggregates_; ++h)
+    for (int e = F.start[h]; e < F.start[h + 1]; ++e) {
+      const int g = F.col[e];
+      if (g < h) continue;
+      const double* gh = F.at(g, h);
+      const double* hg = F.at(h, g);
+      for (int k = 0; k < 6; ++k)
+        for (int l = g == h ? k : 0; l < 6; ++l)
+          entries.emplace_back(6 * g + l, 6 * h + k, 0.5 * (gh[6 * l + k] + hg[6 * k + l]));
+    }
+  F.a.resize(nc, nc);
+  F.a.setFromTriplets(entries.begin(), entries.end());
+  if (!F.analysed) {
+    F.llt.analyzePattern(F.a);
+    F.analysed = true;
   }
+  F.llt.factorize(F.a);
+  if (F.llt.info() != Eigen::Success) {
+    // A mode no node moves (an aggregate of collinear nodes): a tiny shift keeps it definite.
+    double top = 0;
+    for (int j = 0; j < nc; ++j) top = std::max(top, F.a.coeff(j, j));
+    for (int j = 0; j < nc; ++j) F.a.coeffRef(j, j) += 1e-9 * top;
+    F.llt.factorize(F.a);
+  }
+  F.ok = F.llt.info() == Eigen::Success;
 }
 
 double CoarseLevel::add(const Vec3* r, Vec3* z, Vec3* p, const std::uint8_t* mask) {
   const int nc = size();
-  if (nc == 0 || f_->llt.info() != Eigen::Success) return 0.0;
+  if (nc == 0 || !f_->ok) return 0.0;
+  // The modes are translations and e_k x d (d the node's scaled offset from its patch's
+  // centroid), with the held components taken out, a diagonal projection H: mode_k . r =
+  // e_k . (H r) for the translations and e_k . (d x H r) for the rotations, and the patch's
+  // motion at the node is H (c_t + c_r x d).
   std::fill(y_.begin(), y_.end(), 0.0);
   for (int i = 0; i < nodes_; ++i) {
     const int g = agg_[i];
     if (g < 0) continue;
-    for (int k = 0; k < 6; ++k) y_[6 * g + k] += double(dot(mode(i, k), r[i]));
+    const Vec3d hr(free_part(r[i], held_[i]));
+    const Vec3d rot = cross(Vec3d((at_[i] - centre_[g]) * scale_), hr);
+    double* y = y_.data() + 6 * g;
+    y[0] += hr.x, y[1] += hr.y, y[2] += hr.z;
+    y[3] += rot.x, y[4] += rot.y, y[5] += rot.z;
   }
   Eigen::Map<Eigen::VectorXd> y(y_.data(), nc), c(c_.data(), nc);
   c = f_->llt.solve(y);
@@ -150,8 +208,10 @@ double CoarseLevel::add(const Vec3* r, Vec3* z, Vec3* p, const std::uint8_t* mas
   for (int i = 0; i < nodes_; ++i) {
     const int g = agg_[i];
     if (g < 0) continue;
-    Vec3 w;
-    for (int k = 0; k < 6; ++k) w += mode(i, k) * Real(c_[6 * g + k]);
+    const double* ci = c_.data() + 6 * g;
+    const Vec3d d((at_[i] - centre_[g]) * scale_);
+    Vec3 w(Vec3d(ci[0], ci[1], ci[2]) + cross(Vec3d(ci[3], ci[4], ci[5]), d));
+    w = free_part(w, held_[i]);
     if (mask) w = free_part(w, mask[i]);
     z[i] += w;
     if (p) p[i] += w;

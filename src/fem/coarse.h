@@ -1,6 +1,7 @@
 // A coarse level for the bodies' CG (host only): the nodes binned into aggregates a few
 // elements across, each moving rigidly (three translations, three small rotations about its
-// centroid), and the step operator A projected on them, P^T A P, factored once a step. Added
+// centroid), and the step operator A projected on them, P^T A P, a sparse matrix of 6x6 blocks
+// (one per pair of patches that share an element), factored by a sparse Cholesky. Added
 // to block Jacobi (z = D^-1 r + P (P^T A P)^-1 P^T r, a two-level additive Schwarz method), it
 // carries the smooth, long-wave part of the error that block Jacobi moves a node ring per
 // iteration, so the iterations no longer grow with the stiffness (docs/design.md, "Coarse
@@ -19,10 +20,10 @@ namespace fem {
 
 class CoarseLevel {
  public:
-  // Aggregates of 4 median rest edges a side, refactored every 10 steps: on the bench's 10 MPa
-  // bunny (22.5k tetrahedra) 3 edges cost more in the factor than they save in iterations, and
-  // the factor once a step took 40 % of the step (docs/design.md, "Coarse level").
-  static constexpr double kCells = 4.0;
+  // Aggregates of 3 median rest edges a side, refactored every 10 steps: with the sparse factor
+  // 3 edges take fewer iterations than 4 for less time (2.5 and 2 only grow the factor), and
+  // factoring once a step took 40 % of the step (docs/design.md, "Coarse level").
+  static constexpr double kCells = 3.0;
   static constexpr int kEvery = 10;
 
   // Aggregates of the model's free nodes: cubes of side `cells` median rest edges, per body.

@@ -165,8 +165,9 @@ std::string scene_format_markdown() {
         "tables; 281 B per body node, 372 B per tetrahedron and 36 B per surface triangle "
         "(counted as two a node before meshing), with `fem.contact` 105 B, 57 B and 216 B more, "
         "with fluid 16 B a node and 80 B a triangle more, with `fem.preconditioner` "
-        "`two_level` 17 B a node and its two dense matrices (16 B times the square of 6 "
-        "unknowns per 16 nodes, at most 52 MB). For fluid with the tank's faces in "
+        "`two_level` 17 B a node and its sparse matrix and factor, bounded by 16 B times the "
+        "square of 6 unknowns per 16 nodes, at most 52 MB (the bench's bunny holds 4 MB). For "
+        "fluid with the tank's faces in "
         "the rays, and for bodies alone, with contact or in water, this comes to 1.0-1.25 "
         "times what a run holds (`tests/scene_limits_test.cpp`).\n\n";
 

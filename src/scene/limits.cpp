@@ -184,8 +184,9 @@ SceneSize scene_size(const SceneSpec& s) {
   z.body_bytes =
       body_bytes(z.body_nodes, z.body_tets, 2.0 * z.body_nodes, s.fem.contact, s.has_fluid());
   if (s.fem.preconditioner == FemPreconditioner::TwoLevel) {
-    // The coarse level: a patch of at least 16 nodes, 6 unknowns each, two dense matrices of
-    // doubles, capped; per node its patch, position and mask.
+    // The coarse level: a patch of at least 16 nodes, 6 unknowns each, its sparse matrix and
+    // factor bounded by two dense matrices of doubles, capped; per node its patch, position
+    // and mask.
     const double size = std::min(double(FemSettings::kCoarseMaxSize), 6.0 * z.body_nodes / 16.0);
     z.body_bytes += 16.0 * size * size + 17.0 * z.body_nodes;
   }

@@ -68,8 +68,8 @@ struct FemSettings {
   // A coarse level beside block Jacobi in the CG (fem/coarse.h, CPU backend): aggregates of
   // about 4 rest edges moving rigidly. Iterations stop growing with the stiffness.
   bool two_level = false;
-  // The coarse level's largest size (6 unknowns a patch): its two dense 1800^2 matrices hold
-  // 52 MB; a larger body gets larger patches.
+  // The coarse level's largest size (6 unknowns a patch), which keeps its sparse factor small
+  // (under 52 MB even were it dense); a larger body gets larger patches.
   static constexpr int kCoarseMaxSize = 1800;
   int rotation_iterations = 3;  // Mueller et al. 2016 iterations per step (warm-started)
   // Linearisations per step: 1 is the linearly implicit step; each further one re-extracts
