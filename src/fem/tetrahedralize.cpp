@@ -82,8 +82,8 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& o) {
   if (out.numberoftetrahedra <= 0 || out.numberofcorners < 4)
     throw MeshError(file, "TetGen produced no tetrahedra", kRemesh);
 
-  // Points no tetrahedron uses (duplicates TetGen set aside) are dropped, the rest renumbered
-  // in TetGen's order, which starts with the surface's own vertices.
+  // Points no tetrahedron uses (duplicates TetGen set aside) are dropped; the rest are
+  // renumbered for locality at the end.
   const int base = out.firstnumber;
   std::vector<int> remap(out.numberofpoints, -1);
   TetMesh m;
@@ -106,6 +106,7 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& o) {
       std::swap(t.v[2], t.v[3]);
   }
   peel_flat_caps(m, o.peel_caps);
+  order_for_locality(m);
   try {
     validate_mesh(m, "the tetrahedralisation");
   } catch (const std::runtime_error& e) { throw MeshError(file, e.what(), kRemesh); }

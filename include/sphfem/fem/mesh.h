@@ -78,6 +78,13 @@ std::vector<Tri> boundary_faces(const std::vector<Tet>& tets);
 // on an ear's tip turns it inside out. Returns the number removed (0 when max_flatness <= 0).
 int peel_flat_caps(TetMesh& m, double max_flatness);
 
+// Renumbers the nodes along a Morton (Z-order) curve of their positions and the elements by
+// their lowest node, each tie kept in its old order; orientations unchanged. A mesher's order
+// scatters an element's nodes over the whole array, so the threads' static shares of the
+// elements and of the nodes overlap little and every pass moves cache lines between cores
+// (docs/design.md, "Node order").
+void order_for_locality(TetMesh& m);
+
 // Volume enclosed by a closed, outward-oriented triangle surface (divergence theorem).
 double enclosed_volume(const std::vector<Vec3d>& x, const std::vector<Tri>& tris);
 
