@@ -127,7 +127,9 @@ TEST(SimBodyContact, TwoBallsHeadOnKeepMomentumNeverIntersectAndSeparate) {
   EXPECT_LT(on.drift, 1e-4 * on.scale);
   EXPECT_GT(on.v_apart, 0.05) << "the balls should bounce apart";
   EXPECT_GT(on.gap_end, 0.0);
-  EXPECT_LE(on.e_max, on.e0) << "contact must not create energy";
+  // To the state's precision (float velocities: a relative 1e-6 is a few ulps of the kinetic
+  // energy), which a build without FMA (the sanitizers') reaches in free flight before contact.
+  EXPECT_LE(on.e_max, on.e0 * (1 + 1e-6)) << "contact must not create energy";
   const BallsRun off = throw_balls(false);
   std::printf("[ measured ] contact off: most intersecting pairs %ld\n", off.worst_pairs);
   EXPECT_GT(off.worst_pairs, 0) << "without contact the balls must pass into each other";
