@@ -13,7 +13,7 @@ DEMO_OUT ?= out/default
 ASAN_BUILD ?= build/asan
 # Assimp leaks inside its own loaders on some malformed files (tests/lsan.supp).
 ASAN_ENV = ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 SPHFEM_FUZZ_SLOW=20
-# What CI runs under the sanitizers (the whole suite takes hours there, see test-asan): the readers, their fuzz
+# What CI runs under the sanitizers (the whole suite takes an hour or more, see test-asan): the readers, their fuzz
 # tests, the limits, the output failures, and short runs of fluid and bodies coupled.
 ASAN_QUICK = FuzzReaders|SceneLimits|SceneErrors|SceneLoad|FemImport|IoFrame|IoSeries|RunInfo|CliOutput|Cli\.RunWritesFrames|Cli\.RunOfABodyScene|SimBodiesWithFluid|/CoupleMethods\.
 # /CoupleMethods. is the momentum test of the three couplings (77 s for the three under the
@@ -53,8 +53,9 @@ asan-build: deps
 	@cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=Debug -DSPHFEM_SANITIZE=ON -DSPHFEM_ENABLE_CUDA=OFF -DSPHFEM_ENABLE_GL=OFF >/dev/null
 	@cmake --build $(ASAN_BUILD) -j$(JOBS) --target sphfem_tests sphfem_cli
 
-# The whole suite under the sanitizers: any report fails its test. About 4.5 hours of test time
-# (2.3 on two cores); ASAN_TESTS (a ctest regex) runs a part, e.g. the parameterised suites '/'.
+# The whole suite under the sanitizers: any report fails its test. About 2 hours of test time
+# (an hour on two idle cores); ASAN_TESTS (a ctest regex) runs a part, e.g. the parameterised
+# suites '/'. Its results: docs/validation.md, "The whole suite under the sanitizers".
 ASAN_TESTS ?= .
 test-asan: asan-build
 	$(ASAN_ENV) ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS) -R '$(ASAN_TESTS)'
