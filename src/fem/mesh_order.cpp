@@ -5,20 +5,10 @@
 #include <utility>
 #include <vector>
 
+#include "collide/lbvh.h"
 #include "sphfem/fem/mesh.h"
 
 namespace sphfem {
-
-namespace {
-
-// The 21 low bits of v spread to every third bit.
-std::uint64_t spread(std::uint64_t v) {
-  std::uint64_t r = 0;
-  for (int b = 0; b < 21; ++b) r |= ((v >> b) & 1u) << (3 * b);
-  return r;
-}
-
-}  // namespace
 
 void order_for_locality(TetMesh& m) {
   if (m.x.empty()) return;
@@ -29,14 +19,12 @@ void order_for_locality(TetMesh& m) {
       hi[a] = std::max(hi[a], p[a]);
     }
   // One scale for the three axes: the curve's cells are cubes, not stretched with the box.
+  // The BVH's 30-bit codes (1,024 cells an axis); nodes sharing a cell keep their old order.
   const double side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-  const double to_cell = side > 0 ? double((1 << 21) - 1) / side : 0.0;
-  std::vector<std::pair<std::uint64_t, int>> key(m.x.size());
-  for (std::size_t i = 0; i < m.x.size(); ++i) {
-    std::uint64_t code = 0;
-    for (int a = 0; a < 3; ++a) code |= spread(std::uint64_t((m.x[i][a] - lo[a]) * to_cell)) << a;
-    key[i] = {code, int(i)};
-  }
+  const double inv = side > 0 ? 1.0 / side : 0.0;
+  std::vector<std::pair<std::uint32_t, int>> key(m.x.size());
+  for (std::size_t i = 0; i < m.x.size(); ++i)
+    key[i] = {collide::morton30(Vec3((m.x[i] - lo) * inv)), int(i)};
   std::sort(key.begin(), key.end());  // ties by old index: the pair's second
   std::vector<int> to(m.x.size());
   std::vector<Vec3d> x(m.x.size());
