@@ -4,7 +4,8 @@
 // alone fails one of the two: faces within a rest edge never counting lets the crease pass
 // through itself (as the paper's heavy tube's wall did, buckled by the water jet), and only
 // faces within three gaps exempted pushes the sliding vertex off its sheet (as the bunny's
-// fold did, wrinkling until elements inverted).
+// fold did, wrinkling until elements inverted). And the two sides of a crevice, closer at
+// rest than either rule's radius, are held from passing through each other as it closes.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "sphfem/fem/contact.h"
+#include "sphfem/fem/import.h"
 #include "sphfem/fem/mesh.h"
 #include "sphfem/fem/model.h"
 
@@ -102,6 +104,63 @@ TEST(FemContactNeighbours, VertexSlidAlongItsSheetIsLeftOnIt) {
               double(norm(x[p] - slid)) / kGap);
   EXPECT_EQ(st.pairs, 0);
   EXPECT_EQ(double(norm(x[p] - slid)), 0.0);
+}
+
+// A body shaped like a C lying on its side: two slabs kThick high, a slot of two gaps between
+// them, joined by the first column of cells (the slot's side of a scanned bunny's lip).
+BodiesModel slotted(double slot) {
+  TetMesh box = make_box(Vec3d(0, 0, 0), Vec3d(kNx * kCell, 3 * kThick, kNz * kCell), kNx, 3, kNz);
+  for (Vec3d& p : box.x)  // layers at 0, T, T + slot, 2 T + slot
+    if (p.y > 1.5 * kThick) p.y += slot - kThick;
+  std::vector<Tet> kept;
+  for (const Tet& t : box.tets) {
+    Vec3d c;
+    for (int v : t.v) c += box.x[v] * 0.25;
+    if (c.y > kThick && c.y < kThick + slot && c.x > kCell) continue;  // the slot
+    kept.push_back(t);
+  }
+  box.tets = kept;
+  FemSettings set;
+  Material mat;
+  mat.young = 1e4;
+  return compile_bodies({compile_body(box, mat)}, set);
+}
+
+TEST(FemContactNeighbours, CreviceClosingKeepsItsSidesApart) {
+  const double slot = 2 * kGap;  // within three gaps: neighbours of either radius
+  const BodiesModel m = slotted(slot);
+  SurfaceContact contact(m, settings());
+  std::vector<Vec3> v(m.x0.size());
+  std::vector<std::uint8_t> moved;
+  std::vector<Vec3> x = m.x0;
+  const ContactStats rest = contact.resolve(m.x0, x, v, 1e-3, moved);
+  EXPECT_EQ(rest.pairs, 0) << "nothing is pushed at rest";
+  // The upper slab's free end pressed down by 1.5 slots in one step (its nodes past the
+  // second column; the second column half as far): it would end a gap through the lower slab.
+  std::vector<int> upper, lower;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double px = double(m.x0[i].x), py = double(m.x0[i].y);
+    if (py > kThick + 0.5 * slot) {
+      x[i].y -= Real(1.5 * slot * std::min(1.0, std::max(0.0, px / kCell - 1)));
+      if (std::fabs(py - kThick - slot) < 1e-9 && px > 2 * kCell) upper.push_back(int(i));
+    } else if (std::fabs(py - kThick) < 1e-9 && px > 2 * kCell) {
+      lower.push_back(int(i));
+    }
+  }
+  const ContactStats st = contact.resolve(m.x0, x, v, 1e-3, moved);
+  double closest = 1e9;  // the slot's sides, node over node
+  for (int a : upper)
+    for (int b : lower)
+      if (std::fabs(double(m.x0[a].x - m.x0[b].x)) < 1e-9 &&
+          std::fabs(double(m.x0[a].z - m.x0[b].z)) < 1e-9)
+        closest = std::min(closest, double(x[a].y - x[b].y));
+  const long crossed = intersecting_pairs(m, x);
+  std::printf(
+      "[ measured ] crevice: %d pairs, its sides %.3g gaps apart, %ld triangle pairs crossed\n",
+      st.pairs, closest / kGap, crossed);
+  EXPECT_GT(st.pairs, 0);
+  EXPECT_EQ(crossed, 0);
+  EXPECT_GE(closest, 0.99 * kGap) << "half the slot's rest width is kept";
 }
 
 }  // namespace

@@ -315,10 +315,12 @@ SurfaceContact::Rest SurfaceContact::rest_neighbours(int p, int f, Real shrink) 
     const Vec3 q =
         collide::closest_on_triangle(x0_[p], x0_[t.v[0]], x0_[t.v[1]], x0_[t.v[2]]).point;
     const Real d2 = norm2(x0_[p] - q), g = shrink * Real(3 * gap_), r = shrink * face_edge_[f];
-    if (d2 < g * g) return kNever;
-    if (d2 < r * r && (two_rings(p, t.v[0]) || two_rings(p, t.v[1]) || two_rings(p, t.v[2])))
-      return kSheet;
-    return kApart;
+    Rest near = kApart;
+    if (d2 < g * g)
+      near = kNever;
+    else if (d2 < r * r && (two_rings(p, t.v[0]) || two_rings(p, t.v[1]) || two_rings(p, t.v[2])))
+      near = kSheet;
+    return near != kApart && crevice_gap(p, f) > Real(0) ? kCrevice : near;
   }
   const std::array<int, 2>&E = edges_[p], &G = edges_[-f - 1];
   if (node_body_[E[0]] != node_body_[G[0]]) return kApart;
@@ -364,10 +366,26 @@ bool SurfaceContact::facing(int p, int f, const std::vector<Vec3>& x) const {
       edge_faces_.data() + edge_face_start_[g], edge_faces_.data() + edge_face_start_[g + 1]);
 }
 
-// Whether pair (p, f) may count at x, as far as rest neighbours go.
-bool SurfaceContact::may_touch(int p, int f, const std::vector<Vec3>& x) const {
+// A same-body vertex p that lay across a crevice from face f at rest: in front of it and over
+// it (within 45 degrees of its normal), as the two sides of a scanned bunny's lip do, a gap
+// or two apart. Closing the crevice is the body's business, crossing it is not: such a pair
+// counts however close it lay, and keeps half its rest distance (or the gap, if less), so
+// nothing is pushed at rest. 0 for any other pair.
+Real SurfaceContact::crevice_gap(int p, int f) const {
+  const Tri& t = tris_[f];
+  const Vec3 n = collide::unit_normal(x0_[t.v[0]], x0_[t.v[1]], x0_[t.v[2]]);
+  const Vec3 w =
+      x0_[p] - collide::closest_on_triangle(x0_[p], x0_[t.v[0]], x0_[t.v[1]], x0_[t.v[2]]).point;
+  const Real d = dot(w, n);
+  if (!(d > Real(0)) || norm2(w) > 2 * d * d) return Real(0);
+  return std::min(Real(gap_), Real(0.5) * d);
+}
+
+// Whether pair (p, f) may count at x, as far as rest neighbours go, and the distance it keeps.
+bool SurfaceContact::may_touch(int p, int f, const std::vector<Vec3>& x, Real& keep) const {
   const Rest r = rest_neighbours(p, f, Real(1));
-  return r == kApart || (r == kSheet && facing(p, f, x));
+  keep = r == kCrevice ? crevice_gap(p, f) : Real(gap_);
+  return r == kApart || r == kCrevice || (r == kSheet && facing(p, f, x));
 }
 
 // Vertex p is in contact with face f when it lies within the gap in front of the face, or
@@ -377,21 +395,25 @@ bool SurfaceContact::may_touch(int p, int f, const std::vector<Vec3>& x) const {
 // vertex beside the face, behind its plane, may slide under it within a step on a wavy
 // surface). Faces that touch p never count, nor its rest neighbours unless folded to face it.
 bool SurfaceContact::vertex_face(int p, int f, const std::vector<Vec3>& x_old,
-                                 const std::vector<Vec3>& x) const {
+                                 const std::vector<Vec3>& x, Real& keep) const {
   const Tri& t = tris_[f];
   if (t.v[0] == p || t.v[1] == p || t.v[2] == p) return false;
-  const Real g = Real(gap_);
+  // Tested with the common gap first, then with the pair's own (never larger).
   const Foot e = foot(x[p], x[t.v[0]], x[t.v[1]], x[t.v[2]]);
-  if (!(e.d < g) || e.lateral2 > g * g || norm2(e.n) == Real(0)) return false;
   const Foot s = foot(x_old[p], x_old[t.v[0]], x_old[t.v[1]], x_old[t.v[2]]);
-  if (s.d < -g && s.lateral2 <= g * g) return false;
-  if (e.d < Real(0)) {
-    const Vec3 dp = x[p] - x_old[p];
-    Real rel = 0;
-    for (int k = 0; k < 3; ++k) rel = std::max(rel, norm(dp - (x[t.v[k]] - x_old[t.v[k]])));
-    if (-e.d > rel + g) return false;
-  }
-  return may_touch(p, f, x);
+  auto touches = [&](Real g) {
+    if (!(e.d < g) || e.lateral2 > g * g || norm2(e.n) == Real(0)) return false;
+    if (s.d < -g && s.lateral2 <= g * g) return false;
+    if (e.d < Real(0)) {
+      const Vec3 dp = x[p] - x_old[p];
+      Real rel = 0;
+      for (int k = 0; k < 3; ++k) rel = std::max(rel, norm(dp - (x[t.v[k]] - x_old[t.v[k]])));
+      if (-e.d > rel + g) return false;
+    }
+    return true;
+  };
+  if (!touches(Real(gap_)) || !may_touch(p, f, x, keep)) return false;
+  return keep == Real(gap_) || touches(keep);
 }
 
 // Edges e and g (sharing no node, not rest neighbours unfolded)
@@ -419,7 +441,8 @@ bool SurfaceContact::edge_edge(int e, int g, const std::vector<Vec3>& x_old,
       for (int b : G) rel = std::max(rel, norm((x[a] - x_old[a]) - (x[b] - x_old[b])));
     if (-d > rel + gap) return false;
   }
-  return may_touch(e, -g - 1, x);
+  Real keep;
+  return may_touch(e, -g - 1, x, keep);
 }
 
 // The pair at positions x: its nodes, their weights (+ on the side the normal points to), the
@@ -429,13 +452,14 @@ bool SurfaceContact::contact(const Pair& c, const std::vector<Vec3>& x, Contact&
     const Tri& t = tris_[c.f];
     const Foot e = foot(x[c.p], x[t.v[0]], x[t.v[1]], x[t.v[2]]);
     if (norm2(e.n) == Real(0)) return false;
-    out = Contact{{c.p, t.v[0], t.v[1], t.v[2]}, {Real(1), -e.w[0], -e.w[1], -e.w[2]}, e.n, e.d};
+    out =
+        Contact{{c.p, t.v[0], t.v[1], t.v[2]}, {Real(1), -e.w[0], -e.w[1], -e.w[2]}, e.n, e.d, c.g};
     return true;
   }
   const std::array<int, 2>&E = edges_[c.p], &G = edges_[-c.f - 1];
   Real s, t;
   const Vec3 w = between_edges(x, E, G, s, t);
-  out = Contact{{E[0], E[1], G[0], G[1]}, {Real(1) - s, s, t - Real(1), -t}, c.n, dot(w, c.n)};
+  out = Contact{{E[0], E[1], G[0], G[1]}, {Real(1) - s, s, t - Real(1), -t}, c.n, dot(w, c.n), c.g};
   return true;
 }
 
@@ -516,7 +540,7 @@ void SurfaceContact::list_near(const std::vector<Vec3>& x_old, const std::vector
         const Vec3 q = collide::closest_on_triangle(x[p], x[t.v[0]], x[t.v[1]], x[t.v[2]]).point;
         if (!(norm2(x[p] - q) <= keep2)) return;
         if (rest_neighbours(p, f, Real(0.99)) == kNever) return;
-        out.push_back({p, f, Vec3()});
+        out.push_back({p, f, Vec3(), Real(0)});
       },
       [&](int e, int g, std::vector<Pair>& out) {
         const std::array<int, 2>&E = edges_[e], &G = edges_[g];
@@ -524,7 +548,7 @@ void SurfaceContact::list_near(const std::vector<Vec3>& x_old, const std::vector
         Real s, t;
         if (!(norm2(between_edges(x, E, G, s, t)) <= keep2)) return;
         if (rest_neighbours(e, -g - 1, Real(0.99)) == kNever) return;
-        out.push_back({e, -g - 1, Vec3()});
+        out.push_back({e, -g - 1, Vec3(), Real(0)});
       });
   near_.clear();
   gather(near_);
@@ -542,11 +566,12 @@ void SurfaceContact::detect(const std::vector<Vec3>& x_old, const std::vector<Ve
   out.clear();
   if (tree_.empty()) return;
   auto test_vertex = [&](int p, int f, std::vector<Pair>& o) {
-    if (vertex_face(p, f, x_old, x)) o.push_back({p, f, Vec3()});
+    Real keep;
+    if (vertex_face(p, f, x_old, x, keep)) o.push_back({p, f, Vec3(), keep});
   };
   auto test_edge = [&](int e, int h, std::vector<Pair>& o) {
     Vec3 n;
-    if (edge_edge(e, h, x_old, x, n)) o.push_back({e, -h - 1, n});
+    if (edge_edge(e, h, x_old, x, n)) o.push_back({e, -h - 1, n, Real(gap_)});
   };
   const int nv = int(verts_.size()), nl = int(leaves_.size());
   // A pair in contact lies within sqrt(g^2 + (g + 4 m)^2) at x when none of its nodes moved
@@ -758,13 +783,13 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
     detect(x_old, x, pairs);
     bool violated = false;
     for (const Pair& c : pairs)
-      if (contact(c, x, k) && k.d < g * Real(0.999)) {
+      if (contact(c, x, k) && k.d < k.g * Real(0.999)) {
         violated = true;
         if (st.rounds == 0) {
           Real h = std::numeric_limits<Real>::max();
           for (int i = 0; i < 4; ++i)
             if (k.w[i] != Real(0)) h = std::min(h, height_[k.node[i]]);
-          st.depth_ratio = std::max(st.depth_ratio, double((g - k.d) / h));
+          st.depth_ratio = std::max(st.depth_ratio, double((k.g - k.d) / h));
         }
       }
     if (!violated) break;
@@ -774,15 +799,15 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
     floored = false;
     for (int s = 0; s < sweeps_ || (floored && s < 4 * sweeps_); ++s) {
       for (const Pair& c : pairs) {
-        if (!contact(c, x, k) || !(k.d < g)) continue;
+        if (!contact(c, x, k) || !(k.d < k.g)) continue;
         const Real W = weight(k);
         if (!(W > Real(0))) continue;
-        const Vec3 push = k.n * ((g - k.d) / W);
+        const Vec3 push = k.n * ((k.g - k.d) / W);
         for (int i = 0; i < 4; ++i) {
           x[k.node[i]] += push * (k.w[i] * inv_mass_[k.node[i]]);
           clamp(k.node[i]);
           if (k.w[i] != Real(0) && inv_mass_[k.node[i]] > Real(0) &&
-              g - k.d > Real(kDeepPush) * height_[k.node[i]])
+              k.g - k.d > Real(kDeepPush) * height_[k.node[i]])
             watch(k.node[i]);
         }
       }
@@ -802,7 +827,7 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
                 touched.end());
   for (int s = 0; s < sweeps_; ++s)
     for (const Pair& c : touched) {
-      if (!contact(c, x, k) || !(k.d < Real(2) * g)) continue;
+      if (!contact(c, x, k) || !(k.d < Real(2) * k.g)) continue;
       const Real W = weight(k);
       Vec3 rel;
       for (int i = 0; i < 4; ++i) rel += v[k.node[i]] * k.w[i];
@@ -822,7 +847,7 @@ ContactStats SurfaceContact::resolve(const std::vector<Vec3>& x_old, std::vector
 
   st.pairs = int(touched.size());
   for (const Pair& c : touched)
-    if (contact(c, x, k)) st.min_gap = std::min(st.min_gap, double(k.d));
+    if (contact(c, x, k)) st.min_gap = std::min(st.min_gap, double(k.d * g / k.g));
   for (std::size_t i = 0; i < x.size(); ++i)
     if (differ(x[i], x_in[i]) || differ(v[i], v_in[i])) moved[i] = 1, ++st.nodes;
   return st;

@@ -32,8 +32,9 @@ struct ContactStats {
   int pairs = 0;   // vertex-face pairs pushed apart or stopped this step
   int rounds = 0;  // detections run
   int nodes = 0;   // nodes whose position or velocity changed
-  // m, the smallest signed vertex-face distance among the candidate pairs after the
-  // response (negative: a vertex still behind a face); +inf when no pair was near.
+  // m, the smallest signed distance among the pairs after the response (negative: a vertex
+  // still behind a face), each scaled to the common gap from its own (a crevice's pair keeps
+  // less, contact.cpp); +inf when no pair was near.
   double min_gap = std::numeric_limits<double>::infinity();
   // The deepest pair found before the response, over the least rest height of its nodes'
   // elements (a push that deep can turn an element inside out at 1).
@@ -57,17 +58,19 @@ class SurfaceContact {
 
  private:
   // A vertex p against face f, or (f < 0) edge p against edge -f - 1 (edges_ indices), with
-  // an edge pair's normal fixed at the step's start.
+  // an edge pair's normal fixed at the step's start, and the distance the pair keeps.
   struct Pair {
     int p, f;
     Vec3 n;
+    Real g;
   };
-  // Four nodes with weights summing to zero, the normal and the signed distance along it.
+  // Four nodes with weights summing to zero, the normal, the signed distance along it and
+  // the distance to keep.
   struct Contact {
     int node[4];
     Real w[4];
     Vec3 n;
-    Real d;
+    Real d, g;
   };
   void build_tree(const std::vector<Vec3>& x);
   double tree_area() const;
@@ -78,15 +81,17 @@ class SurfaceContact {
                       Vertex&& vertex, Edge&& edge);
   void gather(std::vector<Pair>& out) const;
   void list_near(const std::vector<Vec3>& x_old, const std::vector<Vec3>& x, Real skin);
-  bool vertex_face(int p, int f, const std::vector<Vec3>& x_old, const std::vector<Vec3>& x) const;
+  bool vertex_face(int p, int f, const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
+                   Real& keep) const;
   bool edge_edge(int e, int g, const std::vector<Vec3>& x_old, const std::vector<Vec3>& x,
                  Vec3& n) const;
   bool contact(const Pair& c, const std::vector<Vec3>& x, Contact& out) const;
-  enum Rest { kApart, kSheet, kNever };  // how a same-body pair lay at rest (contact.cpp)
+  enum Rest { kApart, kSheet, kNever, kCrevice };  // how a same-body pair lay at rest
   Rest rest_neighbours(int p, int f, Real shrink) const;
+  Real crevice_gap(int p, int f) const;
   bool two_rings(int a, int b) const;
   bool facing(int p, int f, const std::vector<Vec3>& x) const;
-  bool may_touch(int p, int f, const std::vector<Vec3>& x) const;
+  bool may_touch(int p, int f, const std::vector<Vec3>& x, Real& keep) const;
 
   std::vector<Vec3> x0_;  // rest positions: same-body faces near a vertex at rest never count
   std::vector<Tri> tris_;
