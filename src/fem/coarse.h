@@ -48,11 +48,12 @@ class CoarseLevel {
   Vec3 mode(int i, int k) const;  // mode k of node i's aggregate at node i
 
   int nodes_ = 0, aggregates_ = 0;
-  std::vector<int> agg_;            // each node's aggregate, -1 for pinned nodes
-  std::vector<Vec3> centre_;        // each aggregate's centroid at the last factor
-  std::vector<Vec3> at_;            // the node positions at the last factor
-  std::vector<std::uint8_t> held_;  // the wall mask at the last factor
-  Real scale_ = 1;                  // 1 / the aggregates' side: rotations as displacements
+  std::vector<int> agg_;                 // each node's aggregate, -1 for pinned nodes
+  std::vector<int> tet_start_, tet_of_;  // each aggregate's elements: the assembly's rows
+  std::vector<Vec3> centre_;             // each aggregate's centroid at the last factor
+  std::vector<Vec3> at_;                 // the node positions at the last factor
+  std::vector<std::uint8_t> held_;       // the wall mask at the last factor
+  Real scale_ = 1;                       // 1 / the aggregates' side: rotations as displacements
   std::vector<double> y_, c_;
   struct Factor;
   std::unique_ptr<Factor> f_;
