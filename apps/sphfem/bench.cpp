@@ -77,9 +77,13 @@ int run_bench(const BenchOptions& opt) {
     for (int i = 0; i < 20; ++i) solver->step(1.0);  // warm-up: caches, allocations
     const double held = heap_held_bytes() - heap0;
     solver->reset_profile();
-    long iters = 0;
+    long iters = 0, div_iters = 0;
     const auto t0 = std::chrono::steady_clock::now();
-    for (int i = 0; i < opt.steps; ++i) iters += solver->step(1.0).pressure_iterations;
+    for (int i = 0; i < opt.steps; ++i) {
+      const StepInfo info = solver->step(1.0);
+      iters += info.pressure_iterations;
+      div_iters += info.divergence_iterations;
+    }
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
         opt.steps;
@@ -96,7 +100,8 @@ int run_bench(const BenchOptions& opt) {
     const double mps = solver->count() / (ms * 1e-3) / 1e6;
     std::printf("  %-12s %8.2f ms/step  (%.2f M particle-steps/s", "total", ms, mps);
     if (kind == SolverKind::DFSPH)
-      std::printf(", %.1f pressure iterations/step", double(iters) / opt.steps);
+      std::printf(", %.1f pressure and %.1f divergence iterations/step", double(iters) / opt.steps,
+                  double(div_iters) / opt.steps);
     std::printf(")\n");
     std::printf("  %-12s %8.1f MB held (%.0f B a particle, walls included), peak RSS %.1f MB\n",
                 "memory", held / 1e6, held / solver->count(), peak_rss_bytes() / 1e6);
