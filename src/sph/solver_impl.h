@@ -101,6 +101,9 @@ class SolverT final : public FluidSolver {
   void sort(const MovingSurface& moving) override {
     moving_.place(ex_, P_, moving, key_bits());
     fluid_.sort(ex_, grid(fluid_.start.data()), n_, key_bits(), model_.solver == SolverKind::DFSPH);
+    // Where the supports end, for the wall passes of this step (until drift moves the fluid).
+    reached_ = fluid_.view(n_);
+    stages::fluid_reach(ex_, P_, reached_);
     exec_sync(ex_);
   }
 
@@ -178,6 +181,7 @@ class SolverT final : public FluidSolver {
 
   void drift(const DriftLimits& limits, StepInfo& info) override {
     info.clamped = stages::drift(ex_, P_, view(), Real(dt_), limits.travel, limits.surface_v);
+    reached_.reached = 0;
     exec_sync(ex_);
     t_ += dt_;
     ++steps_;
@@ -282,6 +286,7 @@ class SolverT final : public FluidSolver {
       throw std::invalid_argument("fluid state: " + std::to_string(s.emitter_travel.size()) +
                                   " emitters, the model has " + std::to_string(travelled_.size()));
     n_ = s.n;
+    reached_.reached = 0;
     t_ = s.time;
     steps_ = s.steps;
     next_id_ = s.next_id;
@@ -334,10 +339,21 @@ class SolverT final : public FluidSolver {
     return w;
   }
 
-  FluidView view() { return fluid_.view(n_); }
+  FluidView view() {
+    FluidView f = fluid_.view(n_);
+    f.reached = reached_.reached;
+    f.reach_lo = reached_.reach_lo;
+    f.reach_hi = reached_.reach_hi;
+    return f;
+  }
 
   // The tank's samples, sorted into their grid once (upload_tank).
-  BoundaryView tank() { return tank_.view(int(model_.boundary_x.size())); }
+  BoundaryView tank() {
+    BoundaryView b = tank_.view(int(model_.boundary_x.size()));
+    b.quiet_lo = quiet_lo_;
+    b.quiet_hi = quiet_hi_;
+    return b;
+  }
 
   int key_bits() const { return cell_key_bits(model_.grid.cells()); }
 
@@ -345,6 +361,12 @@ class SolverT final : public FluidSolver {
     const MemSpace s = Exec::kSpace;
     const int nb = int(model_.boundary_x.size());
     tank_.resize(nb, grid(nullptr));
+    // The tank's samples lie beyond the domain's faces: the particles away from them skip
+    // the tank's scan (stages::in_quiet).
+    BoundaryView quiet;
+    stages::quiet_box(model_.boundary_x.data(), nb, P_.clamp_lo, P_.clamp_hi, P_.h, quiet);
+    quiet_lo_ = quiet.quiet_lo;
+    quiet_hi_ = quiet.quiet_hi;
     Buffer<Vec3> x(s, std::max(nb, 1));
     Buffer<Real> psi(s, std::max(nb, 1));
     Buffer<std::uint32_t> keys(s, std::max(nb, 1)), perm(s, std::max(nb, 1));
@@ -484,6 +506,8 @@ class SolverT final : public FluidSolver {
   long steps_ = 0;
   FluidBuffers fluid_;          // state and scratch, see sph/fluid_buffers.h
   SampleSet<Exec> tank_;        // the tank's wall samples (upload_tank)
+  Vec3 quiet_lo_, quiet_hi_;    // BoundaryView::quiet_lo of the tank
+  FluidView reached_;           // FluidView::reach_lo of this step (sort), until drift
   MovingSamples<Exec> moving_;  // boundary-particle coupling: samples on a moving surface
   int active_walls_ = 0;        // wall samples with fluid in reach (DFSPH)
   std::vector<Buffer<Vec3>> discs_;

@@ -47,6 +47,10 @@ struct FluidView {
   int* nbr_n = nullptr;
   int nbr_cap = 0;
   std::size_t nbr_si = 0, nbr_sk = 0;
+  // Where the fluid's supports end this step (fluid_reach): no particle is within reach of a
+  // point outside [reach_lo, reach_hi]. reached = 0: not known, every point may be.
+  int reached = 0;
+  Vec3 reach_lo, reach_hi;
 };
 
 // f(j, rij, r2) for each fluid neighbour j of particle i (at xi = f.x[i]), from the list
@@ -157,7 +161,39 @@ struct BoundaryView {
   Real* warm_dens = nullptr;
   const Vec3* v = nullptr;  // velocity of moving samples; nullptr: at rest
   GridView grid;
+  // No sample is within reach of a point strictly inside (quiet_lo, quiet_hi): for the tank,
+  // the domain shrunk by the support (its samples all lie beyond its faces). Empty by default.
+  Vec3 quiet_lo, quiet_hi;
 };
+
+// A point with no sample of b within reach (BoundaryView::quiet_lo): the tank's scan skipped
+// for the particles away from its walls, with the same samples (none) found.
+SPHFEM_HD bool in_quiet(const BoundaryView& b, const Vec3& x) {
+  return x.x > b.quiet_lo.x && x.x < b.quiet_hi.x && x.y > b.quiet_lo.y && x.y < b.quiet_hi.y &&
+         x.z > b.quiet_lo.z && x.z < b.quiet_hi.z;
+}
+
+// The quiet box of samples that all lie beyond the faces of [lo, hi] (the tank's, at x[0..n)):
+// [lo, hi] shrunk by the support and a thousandth of it, or an empty box when a sample lies
+// inside. Host code, once per model.
+inline void quiet_box(const Vec3* x, int n, const Vec3& lo, const Vec3& hi, Real h,
+                      BoundaryView& b) {
+  bool clear = true;
+  for (int k = 0; k < n && clear; ++k) {
+    const Vec3 q = x[k];
+    clear = !(q.x > lo.x && q.x < hi.x && q.y > lo.y && q.y < hi.y && q.z > lo.z && q.z < hi.z);
+  }
+  const Real reach = h * Real(1.001);
+  b.quiet_lo = clear ? lo + Vec3(reach, reach, reach) : Vec3();
+  b.quiet_hi = clear ? hi - Vec3(reach, reach, reach) : Vec3();
+}
+
+// A point with no fluid particle within reach (FluidView::reach_lo): a wall sample far from the
+// water skips its scan of the fluid's grid, with the same particles (none) found.
+SPHFEM_HD bool out_of_reach(const FluidView& f, const Vec3& x) {
+  return f.reached && (x.x < f.reach_lo.x || x.x > f.reach_hi.x || x.y < f.reach_lo.y ||
+                       x.y > f.reach_hi.y || x.z < f.reach_lo.z || x.z > f.reach_hi.z);
+}
 
 // The closest body surface of each particle (SurfaceProximity in sph/solver.h).
 struct SurfaceView {
@@ -179,8 +215,9 @@ struct Walls {
 // Calls f(b, j, rij, r2) for the samples j of both sets within reach of xi, the tank's first.
 template <class F>
 SPHFEM_HD void for_wall_samples(const Walls& w, const Vec3& xi, Real h2, F&& f) {
-  for_neighbors(w.fixed.grid, w.fixed.x, xi, h2,
-                [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.fixed, j, r, r2); });
+  if (!in_quiet(w.fixed, xi))
+    for_neighbors(w.fixed.grid, w.fixed.x, xi, h2,
+                  [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.fixed, j, r, r2); });
   for_neighbors(w.moving.grid, w.moving.x, xi, h2,
                 [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.moving, j, r, r2); });
 }
@@ -293,6 +330,24 @@ void cell_starts(Exec& ex, const std::uint32_t* keys, std::uint32_t* start, int 
 template <class Exec, class T>
 void gather(Exec& ex, const T* src, T* dst, const std::uint32_t* perm, int n) {
   parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) { dst[i] = src[perm[i]]; });
+}
+
+// The box of the fluid's supports: its particles' bounds widened by the support and a
+// thousandth of it, so that a point outside is beyond reach of every particle in float
+// arithmetic too (out_of_reach).
+template <class Exec>
+void fluid_reach(Exec& ex, const SphParams P, FluidView& f) {
+  const FluidView c = f;
+  const Real big = Real(3e38);
+  Real lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = -reduce_max(ex, c.n, -big, [=] SPHFEM_LAMBDA(int i) -> Real { return -c.x[i][a]; });
+    hi[a] = reduce_max(ex, c.n, -big, [=] SPHFEM_LAMBDA(int i) -> Real { return c.x[i][a]; });
+  }
+  const Real reach = P.h * Real(1.001);
+  f.reach_lo = Vec3(lo[0] - reach, lo[1] - reach, lo[2] - reach);
+  f.reach_hi = Vec3(hi[0] + reach, hi[1] + reach, hi[2] + reach);
+  f.reached = c.n > 0 && hi[0] >= lo[0] && hi[1] >= lo[1] && hi[2] >= lo[2] ? 1 : 0;
 }
 
 // Density (and the DFSPH factor): rho_i = m sum_j W_ij + sum_b psi_b W_ib. WCSPH also sets
@@ -492,12 +547,13 @@ void wall_pressure(Exec& ex, const SphParams P, const FluidView f, const GridVie
     const Vec3 xb = b.x[k];
     Real sw = 0, sp = 0;
     Vec3 srw;
-    for_neighbors(g, f.x, xb, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      const Real w = P.kernel.W(std::sqrt(r2));
-      sw += w;
-      sp += f.p[j] * w;
-      srw += r * (f.rho[j] * w);
-    });
+    if (!out_of_reach(f, xb))
+      for_neighbors(g, f.x, xb, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+        const Real w = P.kernel.W(std::sqrt(r2));
+        sw += w;
+        sp += f.p[j] * w;
+        srw += r * (f.rho[j] * w);
+      });
     Real pb = sw > Real(0) ? (sp + dot(P.gravity, srw)) / sw : Real(0);
     if (pb < Real(0)) pb = Real(0);
     const Real rhob = P.rho0 * (Real(1) + pb / P.stiffness);
@@ -686,18 +742,19 @@ int wall_density(Exec& ex, const SphParams P, const FluidView f, const GridView 
     Vec3 srw;
     int count = 0;
     const Real vol = b.psi[k] / P.rho0;
-    for_neighbors(g, f.x, xb, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      const Real rr = std::sqrt(r2);
-      const Vec3 gw = P.kernel.grad(r, rr) * vol;
-      const Real w = P.kernel.W(rr);
-      sum += w;
-      grad2 += norm2(gw);
-      shared -= dot(gw, f.gwall[j]);
-      kdiv += f.warm_div[j] * w;
-      kdens += f.warm_dens[j] * w;
-      srw += r * w;
-      ++count;
-    });
+    if (!out_of_reach(f, xb))
+      for_neighbors(g, f.x, xb, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+        const Real rr = std::sqrt(r2);
+        const Vec3 gw = P.kernel.grad(r, rr) * vol;
+        const Real w = P.kernel.W(rr);
+        sum += w;
+        grad2 += norm2(gw);
+        shared -= dot(gw, f.gwall[j]);
+        kdiv += f.warm_div[j] * w;
+        kdens += f.warm_dens[j] * w;
+        srw += r * w;
+        ++count;
+      });
     b.rho[k] = b.rest[k] + P.mass * sum;
     b.full[k] = b.nb_rest[k] + count >= full_neighborhood(P) ? 1 : 0;
     const Real diag = shared > grad2 ? shared : grad2;
