@@ -112,8 +112,8 @@ struct PairChunk {
 // passes, which compute every pair's kernel anew, were two thirds of its step; chunked, its
 // solves take about 40 % less time. A device computes the pairs one by one.
 template <bool WithW, class F>
-SPHFEM_HD void for_fluid_pairs(const FluidView& f, const GridView& g, const Kernel& K, int i,
-                               const Vec3& xi, Real h2, F&& fn) {
+SPHFEM_HD_INLINE void for_fluid_pairs(const FluidView& f, const GridView& g, const Kernel& K, int i,
+                                      const Vec3& xi, Real h2, F&& fn) {
 #if !defined(__CUDA_ARCH__)
   const int n = f.nbr ? f.nbr_n[i] : -1;
   if (n >= 0) {
@@ -138,6 +138,14 @@ SPHFEM_HD void for_fluid_pairs(const FluidView& f, const GridView& g, const Kern
     const Real rr = std::sqrt(r2);
     fn(j, r, r2, WithW ? K.W(rr) : Real(0), K.grad(r, rr));
   });
+}
+
+// The same, left to the compiler to inline or call: the accelerations' pair term is large
+// (three divisions), and inlined into its pass it ran about a third slower.
+template <bool WithW, class F>
+SPHFEM_HD void for_fluid_pairs_called(const FluidView& f, const GridView& g, const Kernel& K, int i,
+                                      const Vec3& xi, Real h2, F&& fn) {
+  for_fluid_pairs<WithW>(f, g, K, i, xi, h2, fn);
 }
 
 // Bits of FluidView::flags, set by density() for the step's later passes.
@@ -511,9 +519,9 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
     };
     // W only for XSPH.
     if (P.xsph > Real(0))
-      for_fluid_pairs<true>(f, g, P.kernel, i, xi, P.h2, pair);
+      for_fluid_pairs_called<true>(f, g, P.kernel, i, xi, P.h2, pair);
     else
-      for_fluid_pairs<false>(f, g, P.kernel, i, xi, P.h2, pair);
+      for_fluid_pairs_called<false>(f, g, P.kernel, i, xi, P.h2, pair);
     for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        if (r2 <= Real(0)) return;

@@ -11,6 +11,16 @@
 #define SPHFEM_HD inline
 #endif
 
+// A pair loop inlined into its caller on every compiler: the caller's sums then stay in
+// registers (a sum behind a reference was stored and reloaded on every pair).
+#if defined(__CUDACC__)
+#define SPHFEM_HD_INLINE SPHFEM_HD
+#elif defined(__GNUC__)
+#define SPHFEM_HD_INLINE __attribute__((always_inline)) inline
+#else
+#define SPHFEM_HD_INLINE inline
+#endif
+
 // Annotation for lambdas passed to parallel_for: host+device under nvcc, nothing elsewhere.
 #if defined(__CUDACC__)
 #define SPHFEM_LAMBDA __host__ __device__
