@@ -169,7 +169,7 @@ struct PairSums {
 // term(j, rij, r2, W_ij, grad W_ij) (W only when WithW, else 0); T is a Vec3 (PairTerm), and
 // the term must be 0 at r = 0. The host computes a listed particle's pairs a chunk at a time
 // (PairChunk) and sums them PairSums::kLanes at a time in vector lanes, for a heavy term: the
-// accelerations' (three divisions a pair) took 30 % less time. The sweeps' light terms stay
+// accelerations' (three divisions a pair) took 10-30 % less time. The sweeps' light terms stay
 // with for_fluid_pairs: gathering their two or three loads into lanes made them slower. A
 // device, or a particle without a list, sums the pairs one by one in the list's order.
 template <bool WithW, class T, class Term>
