@@ -42,7 +42,9 @@ struct FluidBuffers {
   // Room for cap particles on a grid of `cells` cells; the warm starts begin at 0.
   void allocate(MemSpace s, int capacity, int full_neighbors, long long cells) {
     cap = capacity;
-    for (Buffer<Vec3>* b : {&x, &v, &a, &tmp3}) *b = Buffer<Vec3>(s, cap);
+    // One Vec3 more than the particles: the host's pair lanes read a fourth Real past x_j
+    // (lanes::at). They swap with each other, so all four have it.
+    for (Buffer<Vec3>* b : {&x, &v, &a, &tmp3}) *b = Buffer<Vec3>(s, std::size_t(cap) + 1);
     for (Buffer<Real>* b : {&rho, &p, &alpha, &kappa, &ksum, &warm_div, &warm_dens, &tmpr})
       *b = Buffer<Real>(s, cap);
     warm_div.zero();

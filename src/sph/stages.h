@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "sph/pair_lanes.h"
 #include "sphfem/core/memory.h"
 #include "sphfem/sph/grid.h"
 #include "sphfem/sph/model.h"
@@ -75,125 +76,71 @@ SPHFEM_HD void for_fluid_neighbors(const FluidView& f, const GridView& g, int i,
   }
 }
 
-// a[j] read as three Reals, the form in which the host's vectorised pair sums can gather it
-// (g++ does not vectorise member reads of a Vec3 array).
-SPHFEM_HD Vec3 gather3(const Vec3* a, std::uint32_t j) {
-  static_assert(sizeof(Vec3) == 3 * sizeof(Real), "Vec3 read as three Reals");
-  const Real* p = &a[0].x;
-  const int k = int(j) * 3;
-  return Vec3(p[k], p[k + 1], p[k + 2]);
+// a[j]: what a pair term reads at its neighbour j, written alike for the host's lanes
+// (lanes::at, eight j at once).
+SPHFEM_HD Vec3 at(const Vec3* a, std::uint32_t j) { return a[j]; }
+SPHFEM_HD Real at(const Real* a, std::uint32_t j) { return a[j]; }
+// The per-pair choice of ?: for a 3-vector term (lanes::select per lane).
+SPHFEM_HD Vec3 select(bool m, const Vec3& a, const Vec3& b) { return m ? a : b; }
+
+// Two pair sums at once (nested for more): a term returns both(a, b).
+template <class A, class B>
+struct Both {
+  A a{};
+  B b{};
+  SPHFEM_HD Both& operator+=(const Both& o) {
+    a += o.a;
+    b += o.b;
+    return *this;
+  }
+};
+template <class A, class B>
+SPHFEM_HD Both<A, B> both(const A& a, const B& b) {
+  return {a, b};
 }
 
-#if !defined(__CUDA_ARCH__)
-// A chunk of one particle's listed pairs, computed on the host in two loops: the gathers of
-// x_j into rows, then the square roots and the kernel in one vectorised loop without a branch
-// (solver_cpu.cpp is built with -fno-math-errno -fno-trapping-math for it; neither changes a
-// value). The rows are padded to whole lanes (PairSums) with pairs of i with itself at
-// distance 0, whose W and gradient are 0: every pass's term is then 0 there.
-struct PairChunk {
-  static constexpr int kSize = 32;
-  std::uint32_t j[kSize];
-  Real rx[kSize], ry[kSize], rz[kSize], r2[kSize], w[kSize], s[kSize];
-
-  template <bool WithW, class Kern>
-  void fill(const Kern& kernel, const std::uint32_t* list, std::size_t sk, const Vec3* x,
-            const Vec3& xi, int m, int padded, std::uint32_t self) {
-    for (int k = 0; k < m; ++k) {
-      const std::uint32_t jk = list[std::size_t(k) * sk];
-      const Vec3 r = xi - x[jk];
-      j[k] = jk;
-      rx[k] = r.x;
-      ry[k] = r.y;
-      rz[k] = r.z;
-    }
-    const Kern K = kernel;  // a local copy: no store below can change it
-#pragma omp simd
-    for (int k = 0; k < m; ++k) {
-      const Real q2 = norm2(Vec3(rx[k], ry[k], rz[k]));
-      const Real rr = std::sqrt(q2);
-      r2[k] = q2;
-      s[k] = K.gscale(rr);
-      if (WithW) w[k] = K.W(rr);
-    }
-    for (int k = m; k < padded; ++k) {
-      j[k] = self;
-      rx[k] = ry[k] = rz[k] = r2[k] = w[k] = s[k] = Real(0);
-    }
-  }
+#if SPHFEM_PAIR_LANES
+// Both in the host's lanes (lanes::sum_pairs): its parts summed and reduced alike.
+template <class A, class B>
+Both<A, B> operator+(const Both<A, B>& x, const Both<A, B>& y) {
+  return {x.a + y.a, x.b + y.b};
+}
+template <class A, class B>
+auto total(const Both<A, B>& x) {
+  using lanes::total;
+  return both(total(x.a), total(x.b));
+}
+template <class A, class B>
+Both<A, B> select(lanes::I8 m, const Both<A, B>& x, const Both<A, B>& y) {
+  using lanes::select;
+  return {select(m, x.a, y.a), select(m, x.b, y.b)};
+}
+}  // namespace sphfem::stages
+namespace sphfem::lanes {
+template <class A, class B>
+struct Of<stages::Both<A, B>> {
+  using type = stages::Both<typename Of<A>::type, typename Of<B>::type>;
 };
-
-// How a pair term T is kept in vector lanes: kParts Reals, added to lane l of each part.
-template <class T>
-struct PairTerm;
-template <>
-struct PairTerm<Vec3> {
-  static constexpr int kParts = 3;
-  template <class Lanes>
-  static void add(Lanes& a, int l, const Vec3& t) {
-    a[0][l] += t.x;
-    a[1][l] += t.y;
-    a[2][l] += t.z;
-  }
-  static Vec3 make(const Real* p) { return Vec3(p[0], p[1], p[2]); }
-};
-
-// Partial sums of a pair term T kept in kLanes interleaved lanes, so the host sums kLanes
-// pairs at once; the lanes are added in one fixed order at the end, whatever the vector
-// width, so the bits depend on the list alone.
-template <class T>
-struct PairSums {
-  static constexpr int kLanes = 8;
-  static constexpr int kParts = PairTerm<T>::kParts;
-  Real lane[kParts][kLanes] = {};
-
-  template <class Term>
-  SPHFEM_HD_INLINE void add_group(const PairChunk& c, int k0, Term& term) {
-    for (int l = 0; l < kLanes; ++l) {
-      const int k = k0 + l;
-      const Vec3 r(c.rx[k], c.ry[k], c.rz[k]);
-      PairTerm<T>::add(lane, l, term(c.j[k], r, c.r2[k], c.w[k], r * c.s[k]));
-    }
-  }
-  T total() const {
-    Real out[kParts];
-    for (int q = 0; q < kParts; ++q) {
-      const Real* a = lane[q];
-      out[q] = ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
-    }
-    return PairTerm<T>::make(out);
-  }
-};
+}  // namespace sphfem::lanes
+namespace sphfem::stages {
 #endif
 
-// The sum over the fluid neighbours j of particle i, in the order of for_fluid_neighbors, of
-// term(j, rij, r2, W_ij, grad W_ij) (W only when WithW, else 0); T is a Vec3 (PairTerm), and
-// the term must be 0 at r = 0. The host computes a listed particle's pairs a chunk at a time
-// (PairChunk) and sums them PairSums::kLanes at a time in vector lanes, for a heavy term: the
-// accelerations' (three divisions a pair) took 10-30 % less time. The sweeps' light terms stay
-// with for_fluid_pairs: gathering their two or three loads into lanes made them slower. A
-// device, or a particle without a list, sums the pairs one by one in the list's order.
+// The sum over the fluid neighbours j of particle i of term(j, rij, r2, W_ij, grad W_ij) (W
+// only when WithW, else 0); T is a Real, a Vec3 or a Both of them, and the term reads its
+// arrays through at().
+// The host sums a listed particle's pairs in vector lanes (lanes::sum_pairs: the term is
+// generic and is evaluated there on eight pairs at once); a device, or a particle without a
+// list, sums them one by one in the list's order.
 template <bool WithW, class T, class Term>
 SPHFEM_HD_INLINE T sum_fluid_pairs(const FluidView& f, const GridView& g, const Kernel& K, int i,
                                    const Vec3& xi, Real h2, Term&& term) {
-#if !defined(__CUDA_ARCH__)
+#if SPHFEM_PAIR_LANES
   const int n = f.nbr ? f.nbr_n[i] : -1;
-  if (n >= 0) {
-    constexpr int L = PairSums<T>::kLanes;
-    static_assert(PairChunk::kSize % L == 0, "whole lanes per chunk");
+  if (n >= 0 && f.nbr_sk == 1) {
     const std::uint32_t* list = f.nbr + std::size_t(i) * f.nbr_si;
-    PairChunk c;
-    PairSums<T> sums;
-    for (int k0 = 0; k0 < n; k0 += PairChunk::kSize) {
-      const int m = n - k0 < PairChunk::kSize ? n - k0 : PairChunk::kSize;
-      const int padded = (m + L - 1) / L * L;
-      const std::uint32_t* part = list + std::size_t(k0) * f.nbr_sk;
-      if (K.kind == 0)
-        c.fill<WithW>(K.cubic, part, f.nbr_sk, f.x, xi, m, padded, std::uint32_t(i));
-      else
-        c.fill<WithW>(K.wendland, part, f.nbr_sk, f.x, xi, m, padded, std::uint32_t(i));
-      for (int g0 = 0; g0 < padded; g0 += L) sums.add_group(c, g0, term);
-    }
-    return sums.total();
+    if (K.kind == 0)
+      return lanes::sum_pairs<WithW, T>(K.cubic, list, n, f.x, xi, std::uint32_t(i), term);
+    return lanes::sum_pairs<WithW, T>(K.wendland, list, n, f.x, xi, std::uint32_t(i), term);
   }
 #endif
   T sum{};
@@ -204,44 +151,12 @@ SPHFEM_HD_INLINE T sum_fluid_pairs(const FluidView& f, const GridView& g, const 
   return sum;
 }
 
-// f(j, rij, r2, W_ij, grad W_ij) for each fluid neighbour j of particle i, in the order of
-// for_fluid_neighbors (W only when WithW, else 0). The host computes a listed particle's
-// pairs a chunk at a time (PairChunk) and then hands them to f one by one, so every sum keeps
-// its order (and its bits, up to the compiler's contraction of multiply-adds). DFSPH's sweep
-// passes, which compute every pair's kernel anew, were two thirds of its step; chunked, its
-// solves take about 40 % less time. A device computes the pairs one by one.
-template <bool WithW, class F>
-SPHFEM_HD_INLINE void for_fluid_pairs(const FluidView& f, const GridView& g, const Kernel& K, int i,
-                                      const Vec3& xi, Real h2, F&& fn) {
-#if !defined(__CUDA_ARCH__)
-  const int n = f.nbr ? f.nbr_n[i] : -1;
-  if (n >= 0) {
-    const std::uint32_t* list = f.nbr + std::size_t(i) * f.nbr_si;
-    PairChunk c;
-    for (int k0 = 0; k0 < n; k0 += PairChunk::kSize) {
-      const int m = n - k0 < PairChunk::kSize ? n - k0 : PairChunk::kSize;
-      const std::uint32_t* part = list + std::size_t(k0) * f.nbr_sk;
-      if (K.kind == 0)
-        c.fill<WithW>(K.cubic, part, f.nbr_sk, f.x, xi, m, m, std::uint32_t(i));
-      else
-        c.fill<WithW>(K.wendland, part, f.nbr_sk, f.x, xi, m, m, std::uint32_t(i));
-      for (int k = 0; k < m; ++k) {
-        const Vec3 r(c.rx[k], c.ry[k], c.rz[k]);
-        fn(part[std::size_t(k) * f.nbr_sk], r, c.r2[k], WithW ? c.w[k] : Real(0), r * c.s[k]);
-      }
-    }
-    return;
-  }
-#endif
-  for_fluid_neighbors(f, g, i, xi, h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-    const Real rr = std::sqrt(r2);
-    fn(j, r, r2, WithW ? K.W(rr) : Real(0), K.grad(r, rr));
-  });
-}
-
 // Bits of FluidView::flags, set by density() for the step's later passes.
 constexpr int kFullSupport = 1;  // DFSPH: fluid and wall samples nearly fill the support
 constexpr int kNearTank = 2;     // some of the tank's samples are in reach
+// flags >> kTankListed: 1 + the number of the tank's samples in reach that density() listed
+// after the particle's fluid neighbours, in the scan's order; 0: not listed (scan the grid).
+constexpr int kTankListed = 8;
 
 // Wall samples: the tank's (static) or those on body surfaces (moving).
 struct BoundaryView {
@@ -311,27 +226,44 @@ struct Walls {
   SurfaceView surface;  // the space beyond each particle's closest surface
 };
 
-// Calls f(b, j, rij, r2) for the samples j of both sets within reach of xi, the tank's first.
+// f(b, j, rij, r2) for the tank's samples j in reach of fluid particle i, by its flags of
+// density(): from the particle's list where density() stored them after the fluid neighbours
+// (the scan's samples in the scan's order; the particles by the walls then skip a scan of
+// about 200 candidates a pass), else from the tank's grid where some are in reach (kNearTank;
+// the others skip the scan, nine empty ranges a particle and pass).
 template <class F>
-SPHFEM_HD void for_wall_samples(const Walls& w, const Vec3& xi, Real h2, F&& f) {
-  if (!in_quiet(w.fixed, xi))
+SPHFEM_HD void for_tank_samples(const FluidView& fl, int i, int flags, const Walls& w,
+                                const Vec3& xi, Real h2, F&& f) {
+  const int listed = flags >> kTankListed;
+  if (listed > 0) {
+    const std::uint32_t* list = fl.nbr + std::size_t(i) * fl.nbr_si;
+    const int first = fl.nbr_n[i];
+    for (int k = first; k < first + listed - 1; ++k) {
+      const std::uint32_t j = list[std::size_t(k) * fl.nbr_sk];
+      const Vec3 rij = xi - w.fixed.x[j];
+      f(w.fixed, j, rij, norm2(rij));
+    }
+  } else if (flags & kNearTank) {
     for_neighbors(w.fixed.grid, w.fixed.x, xi, h2,
                   [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.fixed, j, r, r2); });
+  }
+}
+
+// f(b, j, rij, r2) for the samples j of both sets within reach of fluid particle i, the tank's
+// first, found by these flags.
+template <class F>
+SPHFEM_HD void for_wall_samples(const FluidView& fl, int i, int flags, const Walls& w,
+                                const Vec3& xi, Real h2, F&& f) {
+  for_tank_samples(fl, i, flags, w, xi, h2, f);
   for_neighbors(w.moving.grid, w.moving.x, xi, h2,
                 [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.moving, j, r, r2); });
 }
 
-// The same for fluid particle i after density(), which flagged the particles with the tank's
-// samples in reach: the others skip the scan of the tank's grid (nine empty ranges a particle
-// and pass, a tenth of a DFSPH step on the dam break). The samples found are the scan's.
+// The same after density(), by the particle's flags.
 template <class F>
 SPHFEM_HD void for_wall_samples(const FluidView& fl, int i, const Walls& w, const Vec3& xi, Real h2,
                                 F&& f) {
-  if (!fl.flags || (fl.flags[i] & kNearTank))
-    for_neighbors(w.fixed.grid, w.fixed.x, xi, h2,
-                  [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.fixed, j, r, r2); });
-  for_neighbors(w.moving.grid, w.moving.x, xi, h2,
-                [&](std::uint32_t j, const Vec3& r, Real r2) { f(w.moving, j, r, r2); });
+  for_wall_samples(fl, i, fl.flags ? fl.flags[i] : kNearTank, w, xi, h2, f);
 }
 
 // Velocity of particle i relative to wall sample j.
@@ -472,18 +404,32 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     const int last = f.nbr ? f.nbr_cap - 1 : 0;
     const int count = collect_neighbors(g, f.x, xi, P.h2, list, step, last, 0);
     if (f.nbr) f.nbr_n[i] = count <= last ? count : -1;
-    for_fluid_pairs<true>(f, g, P.kernel, i, xi, P.h2,
-                          [&](std::uint32_t, const Vec3&, Real, Real wk, const Vec3& grad) {
-                            sum += wk;
-                            if (with_alpha) {
-                              const Vec3 gw = grad * P.volume;
-                              gsum += gw;
-                              grad2 += norm2(gw);
-                            }
-                          });
+    if (with_alpha) {
+      const auto s = sum_fluid_pairs<true, Both<Real, Both<Vec3, Real>>>(
+          f, g, P.kernel, i, xi, P.h2,
+          [&](const auto&, const auto&, const auto&, const auto& wk, const auto& grad) {
+            const auto gw = grad * P.volume;
+            return both(wk, both(gw, norm2(gw)));
+          });
+      sum = s.a;
+      gsum = s.b.a;
+      grad2 = s.b.b;
+    } else {
+      sum = sum_fluid_pairs<true, Real>(
+          f, g, P.kernel, i, xi, P.h2,
+          [&](const auto&, const auto&, const auto&, const auto& wk, const auto&) { return wk; });
+    }
     Real rho = P.mass * sum;
+    // The tank's samples in reach, listed after the fluid's where the list has room.
+    const int near = in_quiet(w.fixed, xi) ? 0 : kNearTank;
+    int listed = 0;
+    if (f.nbr && near && count <= last) {
+      const int total =
+          collect_neighbors(w.fixed.grid, w.fixed.x, xi, P.h2, list, step, last, count);
+      listed = total <= last ? 1 + total - count : 0;
+    }
     int tank = 0;
-    for_wall_samples(w, xi, P.h2,
+    for_wall_samples(f, i, (listed << kTankListed) | near, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        const Real rr = std::sqrt(r2);
                        rho += b.psi[j] * P.kernel.W(rr);
@@ -503,7 +449,7 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     }
     f.rho[i] = rho;
     f.nb[i] = count;
-    int flags = tank > 0 ? kNearTank : 0;
+    int flags = (tank > 0 ? kNearTank : 0) | (listed << kTankListed);
     if (!with_alpha) {
       const Real p = P.stiffness * (rho / P.rho0 - Real(1));
       f.p[i] = p > Real(0) ? p : Real(0);
@@ -598,21 +544,23 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
     // The pair sum with its switches fixed at compile time: a branch on a switch inside the
     // pair loop kept g++ from vectorising it.
     auto pairs = [&, rho, p, v](auto press, auto av, auto xsph) {
-      auto pair = [&](std::uint32_t j, const Vec3& r, Real r2, Real wk, const Vec3& gw) {
-        const Real rhoj = rho[int(j)];
-        const Vec3 vij = vi - gather3(v, j);
-        const Real vr = dot(vij, r);
-        Real s = Real(0);
-        if (decltype(press)::value) s -= P.mass * (pi_rho2 + p[int(j)] / (rhoj * rhoj));
+      auto pair = [&](const auto& j, const auto& r, const auto& r2, const auto& wk,
+                      const auto& gw) {
+        using R = std::decay_t<decltype(r2)>;
+        const R rhoj = at(rho, j);
+        const auto vij = vi - at(v, j);
+        const R vr = dot(vij, r);
+        R s{};
+        if (decltype(press)::value) s -= P.mass * (pi_rho2 + at(p, j) / (rhoj * rhoj));
         s += Real(10) * P.viscosity * (P.mass / rhoj) * vr / (r2 + eps2);
         if (decltype(av)::value) {
-          const Real mu = hs * vr / (r2 + eps2);
-          const Real push = P.mass * P.alpha_av * P.sound_speed * mu / (Real(0.5) * (rhoi + rhoj));
-          s += vr < Real(0) ? push : Real(0);
+          const R mu = hs * vr / (r2 + eps2);
+          const R push = P.mass * P.alpha_av * P.sound_speed * mu / (Real(0.5) * (rhoi + rhoj));
+          s += vr < Real(0) ? push : R{};
         }
-        Vec3 a = gw * s;
-        if (decltype(xsph)::value) a -= vij * (P.xsph * inv_dt * (P.mass / rhoj) * wk);
-        return r2 > Real(0) ? a : Vec3();
+        auto a = gw * s;
+        if (decltype(xsph)::value) a = a - vij * (P.xsph * inv_dt * (P.mass / rhoj) * wk);
+        return select(r2 > Real(0), a, decltype(a){});
       };
       // W only for XSPH.
       return sum_fluid_pairs<decltype(xsph)::value, Vec3>(f, g, P.kernel, i, xi, P.h2, pair);
@@ -780,11 +728,11 @@ double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g, 
                     Real dt, Real pos_rate, bool divergence) {
   return reduce_sum(ex, f.n, [=] SPHFEM_LAMBDA(int i) -> double {
     const Vec3 xi = f.x[i], vi = f.v[i];
-    Real d = 0;
-    for_fluid_pairs<false>(f, g, P.kernel, i, xi, P.h2,
-                           [&](std::uint32_t j, const Vec3&, Real, Real, const Vec3& gw) {
-                             d += P.volume * dot(vi - f.v[j], gw);
-                           });
+    Real d = sum_fluid_pairs<false, Real>(
+        f, g, P.kernel, i, xi, P.h2,
+        [&](const auto& j, const auto&, const auto&, const auto&, const auto& gw) {
+          return P.volume * dot(vi - at(f.v, j), gw);
+        });
     for_wall_samples(
         f, i, w, xi, P.h2, [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
           d += (b.psi[j] / P.rho0) * dot(relative_to(b, j, vi), P.kernel.grad(r, std::sqrt(r2)));
@@ -893,12 +841,12 @@ void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const Gri
                        const Walls w, Real rate, Real* out) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
-    Real sw = 0, sk = 0;
-    for_fluid_pairs<true>(f, g, P.kernel, i, xi, P.h2,
-                          [&](std::uint32_t j, const Vec3&, Real, Real w, const Vec3&) {
-                            sw += w;
-                            sk += w * f.warm_dens[j];
-                          });
+    const auto fluid = sum_fluid_pairs<true, Both<Real, Real>>(
+        f, g, P.kernel, i, xi, P.h2,
+        [&](const auto& j, const auto&, const auto&, const auto& wk, const auto&) {
+          return both(wk, wk * at(f.warm_dens, j));
+        });
+    Real sw = fluid.a, sk = fluid.b;
     for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3&, Real r2) {
                        const Real wk = P.kernel.W(std::sqrt(r2));
@@ -968,12 +916,11 @@ void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, con
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
     const Real ki = f.kappa[i];
-    Vec3 dv;
-    for_fluid_pairs<false>(f, g, P.kernel, i, xi, P.h2,
-                           [&](std::uint32_t j, const Vec3&, Real, Real, const Vec3& gw) {
-                             // Adding a zero term leaves dv as it is (dv is never -0).
-                             dv += gw * (P.volume * (ki + f.kappa[j]));
-                           });
+    Vec3 dv = sum_fluid_pairs<false, Vec3>(
+        f, g, P.kernel, i, xi, P.h2,
+        [&](const auto& j, const auto&, const auto&, const auto&, const auto& gw) {
+          return gw * (P.volume * (ki + at(f.kappa, j)));
+        });
     for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        const Real k = dfsph_wall_pair(P, b, j, ki, b.kappa[j]);

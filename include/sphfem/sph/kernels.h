@@ -7,7 +7,16 @@
 
 namespace sphfem {
 
-struct CubicSpline {
+// A kernel's calls on one Real, from its templates W_at and gscale_at.
+template <class K>
+struct ScalarCalls {
+  SPHFEM_HD Real W(Real r) const { return static_cast<const K&>(*this).W_at(r); }
+  SPHFEM_HD Real gscale(Real r) const { return static_cast<const K&>(*this).gscale_at(r); }
+  // Gradient with respect to x_i of W(|x_i - x_j|), given rij = x_i - x_j and r = |rij|.
+  SPHFEM_HD Vec3 grad(const Vec3& rij, Real r) const { return rij * gscale(r); }
+};
+
+struct CubicSpline : ScalarCalls<CubicSpline> {
   Real h, inv_h, k, l;
   CubicSpline() = default;
   explicit CubicSpline(Real h_) : h(h_), inv_h(Real(1) / h_) {
@@ -15,52 +24,53 @@ struct CubicSpline {
     k = Real(8) / (pi * h * h * h);
     l = Real(48) / (pi * h * h * h);
   }
-  // W and the gradient's scale select between their pieces instead of branching, so the host
-  // computes a particle's pairs in vectorised loops (stages::for_fluid_pairs); the values are
-  // those of the branches.
-  SPHFEM_HD Real W(Real r) const {
-    const Real q = r * inv_h;
-    const Real f = Real(1) - q;
-    const Real inner = k * (Real(6) * q * q * q - Real(6) * q * q + Real(1));
-    const Real outer = k * Real(2) * f * f * f;
-    const Real w = q <= Real(0.5) ? inner : outer;
-    return q >= Real(1) ? Real(0) : w;
+  // W and the gradient's scale select between their pieces instead of branching, and take R =
+  // Real or a host vector of Reals (sph/pair_lanes.h: ?: selects per lane there), so the host
+  // computes a particle's pairs in vector lanes with these same expressions.
+  template <class R>
+  SPHFEM_HD R W_at(R r) const {
+    const R q = r * inv_h;
+    const R f = Real(1) - q;
+    const R inner = k * (Real(6) * q * q * q - Real(6) * q * q + Real(1));
+    const R outer = k * Real(2) * f * f * f;
+    const R w = q <= Real(0.5) ? inner : outer;
+    return q >= Real(1) ? R{} : w;
   }
   // grad W = rij * gscale(r), 0 outside the support and at r = 0.
-  SPHFEM_HD Real gscale(Real r) const {
-    const Real q = r * inv_h;
-    const Real f = Real(1) - q;
-    const Real inner = l * q * (Real(3) * q - Real(2));
-    const Real outer = -l * f * f;
-    const Real dq = q <= Real(0.5) ? inner : outer;
-    const Real s = dq * inv_h / r;
-    return q >= Real(1) || r <= Real(1e-9) * h ? Real(0) : s;
+  template <class R>
+  SPHFEM_HD R gscale_at(R r) const {
+    const R q = r * inv_h;
+    const R f = Real(1) - q;
+    const R inner = l * q * (Real(3) * q - Real(2));
+    const R outer = -l * f * f;
+    const R dq = q <= Real(0.5) ? inner : outer;
+    const R s = dq * inv_h / r;
+    return (q >= Real(1)) | (r <= Real(1e-9) * h) ? R{} : s;
   }
-  // Gradient with respect to x_i of W(|x_i - x_j|), given rij = x_i - x_j and r = |rij|.
-  SPHFEM_HD Vec3 grad(const Vec3& rij, Real r) const { return rij * gscale(r); }
 };
 
-struct WendlandC2 {
+struct WendlandC2 : ScalarCalls<WendlandC2> {
   Real h, inv_h, k;
   WendlandC2() = default;
   explicit WendlandC2(Real h_) : h(h_), inv_h(Real(1) / h_) {
     const Real pi = Real(3.14159265358979323846);
     k = Real(21) / (Real(2) * pi * h * h * h);
   }
-  SPHFEM_HD Real W(Real r) const {
-    const Real q = r * inv_h;
-    const Real f = Real(1) - q;
-    const Real w = k * f * f * f * f * (Real(1) + Real(4) * q);
-    return q >= Real(1) ? Real(0) : w;
+  template <class R>
+  SPHFEM_HD R W_at(R r) const {
+    const R q = r * inv_h;
+    const R f = Real(1) - q;
+    const R w = k * f * f * f * f * (Real(1) + Real(4) * q);
+    return q >= Real(1) ? R{} : w;
   }
   // dW/dr = -20 k q (1-q)^3 / h; divided by r this is -20 k (1-q)^3 / h^2 (no 1/r singularity).
-  SPHFEM_HD Real gscale(Real r) const {
-    const Real q = r * inv_h;
-    const Real f = Real(1) - q;
-    const Real s = Real(-20) * k * f * f * f * inv_h * inv_h;
-    return q >= Real(1) ? Real(0) : s;
+  template <class R>
+  SPHFEM_HD R gscale_at(R r) const {
+    const R q = r * inv_h;
+    const R f = Real(1) - q;
+    const R s = Real(-20) * k * f * f * f * inv_h * inv_h;
+    return q >= Real(1) ? R{} : s;
   }
-  SPHFEM_HD Vec3 grad(const Vec3& rij, Real r) const { return rij * gscale(r); }
 };
 
 // Either kernel behind one value type, so the solver is not templated on it.
