@@ -99,13 +99,13 @@ double contact_bound(const SceneSize& z) {
 double fluid_bytes(double capacity, double wall_samples, double grid_cells) {
   // Per particle: x, v, a, tmp (4 x 12 B); rho, p, alpha, kappa, kappa_sum, two warm starts,
   // tmp (8 x 4 B); nb, flags, nbr_n, id, keys, perm (6 x 4 B); the neighbour list, room for
-  // twice the 33 lattice points within the support (the compiled count is 27 or 33 as the
-  // support rounds; the larger is taken) (66 x 4 B); the radix sort's scratch, grown by a
-  // quarter (10 B); the
-  // initial x0, v0 kept by the scene's model and by the solver's copy of it (2 x 24 B). Per
-  // wall sample: x (12 B), nine reals and two ints (44 B), x and psi in the two models
-  // (2 x 16 B). Per cell: the fluid's and the samples' cell starts (8 B).
-  return capacity * (4 * 12.0 + 8 * 4.0 + 6 * 4.0 + 66 * 4.0 + 10.0 + 2 * 24.0) +
+  // about twice the 33 lattice points within the support (the compiled count is 27 or 33 as
+  // the support rounds; the larger is taken), rounded down to a multiple of eight (64 x 4 B);
+  // the radix sort's scratch, grown by a quarter (10 B); the initial x0, v0 kept by the
+  // scene's model and by the solver's copy of it (2 x 24 B). Per wall sample: x (12 B), nine reals
+  // and two ints (44 B), x and psi in the two models (2 x 16 B). Per cell: the fluid's and the
+  // samples' cell starts (8 B).
+  return capacity * (4 * 12.0 + 8 * 4.0 + 6 * 4.0 + 64 * 4.0 + 10.0 + 2 * 24.0) +
          wall_samples * (56.0 + 2 * 16.0) + grid_cells * 8.0 + kFixedBytes;
 }
 

@@ -51,9 +51,10 @@ struct FluidBuffers {
     warm_dens.zero();
     nb = Buffer<int>(s, cap);
     flags = Buffer<int>(s, cap);
-    // Room for twice a full support's neighbours; a particle compressed beyond that scans the
-    // grid instead (stages::for_fluid_neighbors).
-    nbr_cap = std::max(32, 2 * full_neighbors);
+    // Room for about twice a full support's neighbours; a particle compressed beyond that scans
+    // the grid instead (stages::for_fluid_neighbors). A multiple of eight: the host pads each
+    // list to whole groups of eight (stages::listed_end).
+    nbr_cap = std::max(32, (2 * full_neighbors) & ~7);
     nbr = Buffer<std::uint32_t>(s, std::size_t(cap) * std::size_t(nbr_cap));
     // A device reads the lists interleaved, entry k of particle i at k * cap + i, so the
     // threads of a warp read consecutive words; the host keeps each list contiguous (one or

@@ -87,7 +87,12 @@ SPHFEM_LANE V8 at(const Vec3* a, const J8& j) {
 // (the hydrostatic tank's pressure error, the resting column's decay, the sampled cup's
 // pressure error): of the orders tried, this one passes all three (docs/validation.md).
 SPHFEM_LANE Real total(R8 a) {
-  return ((a[0] + a[2]) + (a[1] + a[3])) + ((a[4] + a[6]) + (a[5] + a[7]));
+  // ((a0 + a2) + (a1 + a3)) + ((a4 + a6) + (a5 + a7)) by in-lane swaps, as g++ does not
+  // find them (a float sum's two operands commute exactly).
+  const __m256 v = __m256(a);
+  const __m256 t = _mm256_add_ps(v, _mm256_permute_ps(v, 0x4E));  // a0 + a2, a1 + a3 | ...
+  const __m256 u = _mm256_add_ps(t, _mm256_permute_ps(t, 0xB1));  // (a0 + a2) + (a1 + a3) | ...
+  return _mm_cvtss_f32(_mm_add_ss(_mm256_castps256_ps128(u), _mm256_extractf128_ps(u, 1)));
 }
 SPHFEM_LANE Vec3 total(const V8& a) { return Vec3(total(a.x), total(a.y), total(a.z)); }
 
@@ -104,24 +109,18 @@ struct Of<Vec3> {
 };
 
 // The sum over list[0..n) of term(j, rij, r2, W, grad W) with rij = xi - x_j (W only when
-// WithW, else 0), kWidth pairs at a time; the lanes past the list's end hold i itself (self)
-// and their terms are dropped.
+// WithW, else 0), kWidth pairs at a time; the list is padded to whole groups with i itself
+// (stages::listed_end), whose lanes' terms are dropped.
 template <bool WithW, class T, class Kern, class Term>
 SPHFEM_LANE T sum_pairs(const Kern& kernel, const std::uint32_t* list, int n, const Vec3* x,
-                        const Vec3& xi, std::uint32_t self, Term& term) {
+                        const Vec3& xi, Term& term) {
   const Kern K = kernel;  // a local copy: no store in the loop can change it
   const I8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
   typename Of<T>::type acc{};
   for (int k0 = 0; k0 < n; k0 += kWidth) {
     const int m = n - k0;
     const I8 valid = lane < m;
-    // Past the list's end the slots are not this step's: the tail group takes i itself there.
-    std::uint32_t tail[kWidth];
-    J8 j{list + k0};
-    if (m < kWidth) {
-      for (int l = 0; l < kWidth; ++l) tail[l] = l < m ? list[k0 + l] : self;
-      j.k = tail;
-    }
+    const J8 j{list + k0};
     const V8 r = xi - at(x, j);
     const R8 r2 = norm2(r);
     const R8 rr = sqrt(r2);

@@ -76,6 +76,11 @@ SPHFEM_HD void for_fluid_neighbors(const FluidView& f, const GridView& g, int i,
   }
 }
 
+// Where a listed particle's fluid neighbours end and its tank samples begin (kTankListed):
+// the host pads its contiguous lists with the particle itself to whole groups of eight, which
+// its vector lanes read without a tail (lanes::sum_pairs); a device list is not padded.
+SPHFEM_HD int listed_end(const FluidView& f, int n) { return f.nbr_sk == 1 ? (n + 7) & ~7 : n; }
+
 // a[j]: what a pair term reads at its neighbour j, written alike for the host's lanes
 // (lanes::at, eight j at once).
 SPHFEM_HD Vec3 at(const Vec3* a, std::uint32_t j) { return a[j]; }
@@ -138,9 +143,8 @@ SPHFEM_HD_INLINE T sum_fluid_pairs(const FluidView& f, const GridView& g, const 
   const int n = f.nbr ? f.nbr_n[i] : -1;
   if (n >= 0 && f.nbr_sk == 1) {
     const std::uint32_t* list = f.nbr + std::size_t(i) * f.nbr_si;
-    if (K.kind == 0)
-      return lanes::sum_pairs<WithW, T>(K.cubic, list, n, f.x, xi, std::uint32_t(i), term);
-    return lanes::sum_pairs<WithW, T>(K.wendland, list, n, f.x, xi, std::uint32_t(i), term);
+    if (K.kind == 0) return lanes::sum_pairs<WithW, T>(K.cubic, list, n, f.x, xi, term);
+    return lanes::sum_pairs<WithW, T>(K.wendland, list, n, f.x, xi, term);
   }
 #endif
   T sum{};
@@ -237,7 +241,7 @@ SPHFEM_HD void for_tank_samples(const FluidView& fl, int i, int flags, const Wal
   const int listed = flags >> kTankListed;
   if (listed > 0) {
     const std::uint32_t* list = fl.nbr + std::size_t(i) * fl.nbr_si;
-    const int first = fl.nbr_n[i];
+    const int first = listed_end(fl, fl.nbr_n[i]);
     for (int k = first; k < first + listed - 1; ++k) {
       const std::uint32_t j = list[std::size_t(k) * fl.nbr_sk];
       const Vec3 rij = xi - w.fixed.x[j];
@@ -403,7 +407,12 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     const std::size_t step = f.nbr ? f.nbr_sk : 0;
     const int last = f.nbr ? f.nbr_cap - 1 : 0;
     const int count = collect_neighbors(g, f.x, xi, P.h2, list, step, last, 0);
-    if (f.nbr) f.nbr_n[i] = count <= last ? count : -1;
+    // The padding up to listed_end fits where nbr_cap is a multiple of eight (FluidBuffers).
+    int end = listed_end(f, count);
+    const bool kept = f.nbr && count <= last && end <= f.nbr_cap;
+    if (f.nbr) f.nbr_n[i] = kept ? count : -1;
+    if (!kept) end = count;
+    for (int k = count; k < end; ++k) list[k] = std::uint32_t(i);
     if (with_alpha) {
       const auto s = sum_fluid_pairs<true, Both<Real, Both<Vec3, Real>>>(
           f, g, P.kernel, i, xi, P.h2,
@@ -423,10 +432,9 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     // The tank's samples in reach, listed after the fluid's where the list has room.
     const int near = in_quiet(w.fixed, xi) ? 0 : kNearTank;
     int listed = 0;
-    if (f.nbr && near && count <= last) {
-      const int total =
-          collect_neighbors(w.fixed.grid, w.fixed.x, xi, P.h2, list, step, last, count);
-      listed = total <= last ? 1 + total - count : 0;
+    if (kept && near && end <= last) {
+      const int total = collect_neighbors(w.fixed.grid, w.fixed.x, xi, P.h2, list, step, last, end);
+      listed = total <= last ? 1 + total - end : 0;
     }
     int tank = 0;
     for_wall_samples(f, i, (listed << kTankListed) | near, w, xi, P.h2,
