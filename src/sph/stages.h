@@ -433,8 +433,9 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     const int near = in_quiet(w.fixed, xi) ? 0 : kNearTank;
     int listed = 0;
     if (kept && near && end <= last) {
-      const int total = collect_neighbors(w.fixed.grid, w.fixed.x, xi, P.h2, list, step, last, end);
-      listed = total <= last ? 1 + total - end : 0;
+      const int filled =
+          collect_neighbors(w.fixed.grid, w.fixed.x, xi, P.h2, list, step, last, end);
+      listed = filled <= last ? 1 + filled - end : 0;
     }
     int tank = 0;
     for_wall_samples(f, i, (listed << kTankListed) | near, w, xi, P.h2,
