@@ -41,9 +41,10 @@ struct FluidView {
   std::uint32_t* id = nullptr;
   // Fluid neighbours of each particle as density() found them, kept for the step's later
   // passes: the k-th of particle i at nbr[i * nbr_si + k * nbr_sk], k < nbr_n[i]; nbr_n[i] =
-  // -1 where nbr_cap or more were found (those particles scan the grid). nbr = nullptr: no
-  // list. The host lays a particle's list out contiguously (nbr_sk = 1, cache lines), a device
-  // interleaves the lists (nbr_si = 1, coalesced reads of neighbouring threads); see
+  // -1 where nbr_cap or more were found (those particles scan the grid); on the host the
+  // list is padded with i up to listed_end, where the tank's listed samples begin. nbr =
+  // nullptr: no list. The host lays a particle's list out contiguously (nbr_sk = 1, cache lines), a
+  // device interleaves the lists (nbr_si = 1, coalesced reads of neighbouring threads); see
   // FluidBuffers::view.
   std::uint32_t* nbr = nullptr;
   int* nbr_n = nullptr;
@@ -159,7 +160,7 @@ SPHFEM_HD_INLINE T sum_fluid_pairs(const FluidView& f, const GridView& g, const 
 constexpr int kFullSupport = 1;  // DFSPH: fluid and wall samples nearly fill the support
 constexpr int kNearTank = 2;     // some of the tank's samples are in reach
 // flags >> kTankListed: 1 + the number of the tank's samples in reach that density() listed
-// after the particle's fluid neighbours, in the scan's order; 0: not listed (scan the grid).
+// from listed_end on, in the scan's order; 0: not listed (scan the grid).
 constexpr int kTankListed = 8;
 
 // Wall samples: the tank's (static) or those on body surfaces (moving).
@@ -407,11 +408,10 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     const std::size_t step = f.nbr ? f.nbr_sk : 0;
     const int last = f.nbr ? f.nbr_cap - 1 : 0;
     const int count = collect_neighbors(g, f.x, xi, P.h2, list, step, last, 0);
-    // The padding up to listed_end fits where nbr_cap is a multiple of eight (FluidBuffers).
-    int end = listed_end(f, count);
-    const bool kept = f.nbr && count <= last && end <= f.nbr_cap;
+    // The padding up to listed_end fits, as nbr_cap is a multiple of eight (FluidBuffers).
+    const bool kept = f.nbr && count <= last;
+    const int end = kept ? listed_end(f, count) : count;
     if (f.nbr) f.nbr_n[i] = kept ? count : -1;
-    if (!kept) end = count;
     for (int k = count; k < end; ++k) list[k] = std::uint32_t(i);
     if (with_alpha) {
       const auto s = sum_fluid_pairs<true, Both<Real, Both<Vec3, Real>>>(
