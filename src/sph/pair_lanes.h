@@ -82,6 +82,15 @@ SPHFEM_LANE V8 at(const Vec3* a, const J8& j) {
           R8(_mm256_shuffle_ps(t1, t3, 0x44))};
 }
 
+// The first three cache lines of a list (48 entries: a full support's fluid neighbours and a
+// few tank samples), asked for a few particles before a pass reads (or density() writes) it:
+// DFSPH's sweeps waited on the lists at two threads, which the hardware's prefetchers do not
+// fetch ahead (bench/results/README.md, "Lists fetched ahead").
+template <bool Write = false>
+SPHFEM_LANE void prefetch_list(const std::uint32_t* list) {
+  for (int l = 0; l < 3; ++l) __builtin_prefetch(list + 16 * l, Write ? 1 : 0);
+}
+
 // The lanes' sum in one fixed order, whatever the machine: the bits depend on the list alone.
 // Lane l meets lane l + 2 first. Three DFSPH checks sit within the spread of the rounding
 // (the hydrostatic tank's pressure error, the resting column's decay, the sampled cup's

@@ -131,6 +131,10 @@ struct Of<stages::Both<A, B>> {
 namespace sphfem::stages {
 #endif
 
+// How many particles ahead a host pass asks for a list (lanes::prefetch_list): 1, 2, 4 and 8
+// were within the noise of each other, all ahead of none.
+constexpr int kListAhead = 4;
+
 // The sum over the fluid neighbours j of particle i of term(j, rij, r2, W_ij, grad W_ij) (W
 // only when WithW, else 0); T is a Real, a Vec3 or a Both of them, and the term reads its
 // arrays through at().
@@ -144,6 +148,7 @@ SPHFEM_HD_INLINE T sum_fluid_pairs(const FluidView& f, const GridView& g, const 
   const int n = f.nbr ? f.nbr_n[i] : -1;
   if (n >= 0 && f.nbr_sk == 1) {
     const std::uint32_t* list = f.nbr + std::size_t(i) * f.nbr_si;
+    if (i + kListAhead < f.n) lanes::prefetch_list(list + kListAhead * f.nbr_si);
     if (K.kind == 0) return lanes::sum_pairs<WithW, T>(K.cubic, list, n, f.x, xi, term);
     return lanes::sum_pairs<WithW, T>(K.wendland, list, n, f.x, xi, term);
   }
@@ -407,6 +412,10 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     std::uint32_t* list = f.nbr ? f.nbr + std::size_t(i) * f.nbr_si : &scratch;
     const std::size_t step = f.nbr ? f.nbr_sk : 0;
     const int last = f.nbr ? f.nbr_cap - 1 : 0;
+#if SPHFEM_PAIR_LANES
+    if (f.nbr && step == 1 && i + kListAhead < f.n)
+      lanes::prefetch_list<true>(list + kListAhead * f.nbr_si);
+#endif
     const int count = collect_neighbors(g, f.x, xi, P.h2, list, step, last, 0);
     // The padding up to listed_end fits, as nbr_cap is a multiple of eight (FluidBuffers).
     const bool kept = f.nbr && count <= last;
