@@ -113,7 +113,16 @@ class SolverT final : public FluidSolver {
     const Walls w = walls();
     FluidView f = view();
     const GridView g = grid(fluid_.start.data());
-    stages::density(ex_, P_, f, g, w, dfsph);
+    // Under DFSPH the density pass also takes the fluid pairs' sums of the two warm starts
+    // (stages::WarmSums): the divergence solve's first sweep into a, free until the forces, and
+    // the density solve's filter into kappa and kappa_sum, free until the divergence solve.
+    stages::WarmSums warm;
+    if (dfsph) {
+      warm.div_dv = fluid_.a.data();
+      warm.dens_w = fluid_.kappa.data();
+      warm.dens_kw = fluid_.ksum.data();
+    }
+    stages::density(ex_, P_, f, g, w, dfsph, warm);
     if (dfsph) {
       active_walls_ = stages::wall_density(ex_, P_, f, g, w.fixed);
       if (w.moving.n) active_walls_ += stages::wall_density(ex_, P_, f, g, w.moving);
@@ -135,6 +144,12 @@ class SolverT final : public FluidSolver {
   void divergence(StepInfo& info) override {
     if (model_.solver != SolverKind::DFSPH) return;
     const Walls w = walls();
+    // The density solve's warm start, filtered now that the step's dt sets the rate (its fluid
+    // sums are the density pass's, in kappa and kappa_sum, which the solve below takes over);
+    // pressure() makes it the warm start.
+    const Real rate = Real(std::min(1.0, stages::kDfsphWarmSmoothing * warm_weight()));
+    stages::dfsph_smooth_warm(ex_, P_, view(), grid(fluid_.start.data()), w, rate,
+                              fluid_.tmpr.data(), fluid_.kappa.data(), fluid_.ksum.data());
     info.divergence_iterations = solve(view(), grid(fluid_.start.data()), w, Real(dt_), pace_, true,
                                        model_.divergence_tolerance);
     if (w.moving.n)
@@ -153,7 +168,12 @@ class SolverT final : public FluidSolver {
       stages::wall_pressure(ex_, P_, f, g, w.fixed);
       if (w.moving.n) stages::wall_pressure(ex_, P_, f, g, w.moving);
     }
-    stages::accelerations(ex_, P_, f, g, w, wcsph, rdt);
+    // DFSPH: the fluid pairs of the density solve's warm-start sweep, summed here into tmp3
+    // (FluidView::gwall, spent since wall_density) and applied by pressure().
+    if (wcsph)
+      stages::accelerations(ex_, P_, f, g, w, true, rdt);
+    else
+      stages::accelerations(ex_, P_, f, g, w, false, rdt, fluid_.tmpr.data(), fluid_.tmp3.data());
     if (w.moving.n)
       stages::sample_force_impulse(ex_, P_, f, g, w.moving, wcsph, rdt, moving_.impulse());
     stages::kick(ex_, f, rdt);
@@ -163,10 +183,8 @@ class SolverT final : public FluidSolver {
   void pressure(StepInfo& info) override {
     const Walls w = walls();
     if (model_.solver == SolverKind::DFSPH) {
-      // The smoothing keeps pace with the memory (stages::kDfsphWarmSmoothing).
-      const Real rate = Real(std::min(1.0, stages::kDfsphWarmSmoothing * warm_weight()));
-      stages::dfsph_smooth_warm(ex_, P_, view(), grid(fluid_.start.data()), w, rate,
-                                fluid_.tmpr.data());
+      // The warm start as divergence() filtered it. The smoothing keeps pace with the memory
+      // (stages::kDfsphWarmSmoothing).
       fluid_.warm_dens.swap(fluid_.tmpr);
       info.pressure_iterations = solve(view(), grid(fluid_.start.data()), w, Real(dt_), pace_,
                                        false, model_.density_tolerance);
@@ -423,12 +441,14 @@ class SolverT final : public FluidSolver {
     stages::dfsph_warm_start(ex_, f, divergence);
     stages::wall_warm_start(ex_, b, divergence);
     if (mb.n) stages::wall_warm_start(ex_, mb, divergence);
-    auto apply = [&] {
-      stages::dfsph_apply(ex_, P_, f, g, w, dt);
+    auto apply = [&](const Vec3* fluid_dv) {
+      stages::dfsph_apply(ex_, P_, f, g, w, dt, fluid_dv);
       stages::wall_accumulate(ex_, b);
       if (mb.n) stages::wall_accumulate(ex_, mb);
     };
-    apply();
+    // The warm start: its fluid pairs were summed by the density pass (divergence) or the
+    // forces (density).
+    apply(divergence ? fluid_.a.data() : fluid_.tmp3.data());
     const int samples = n_ + active_walls_;
     int it = 0;
     last_error_ = 0;
@@ -439,7 +459,7 @@ class SolverT final : public FluidSolver {
       const double err = samples ? sum / samples : 0.0;
       last_error_ = err;
       if ((err <= tol && it >= kMinSweeps) || it >= model_.max_iterations) break;
-      apply();
+      apply(nullptr);
     }
     stages::dfsph_remember(ex_, f, divergence ? pace : Real(warm_weight()), divergence);
     return it;

@@ -391,6 +391,20 @@ void fluid_reach(Exec& ex, const SphParams P, FluidView& f) {
   f.reached = c.n > 0 && hi[0] >= lo[0] && hi[1] >= lo[1] && hi[2] >= lo[2] ? 1 : 0;
 }
 
+// The fluid pair's term of a sweep's velocity change (dfsph_apply): V (kappa_i + kappa_j)
+// grad W_ij, kappa the sweep's stiffness (density() sums it for the warm start's sweep).
+template <class J, class G>
+SPHFEM_HD_INLINE auto dfsph_pair_term(const SphParams& P, const Real* kappa, Real ki, const J& j,
+                                      const G& grad) {
+  return grad * (P.volume * (ki + at(kappa, j)));
+}
+
+// The fluid pair's weighted warm start of the density solve's filter (dfsph_smooth_warm).
+template <class J, class R>
+SPHFEM_HD_INLINE auto warm_filter_term(const Real* warm, const J& j, const R& wk) {
+  return wk * at(warm, j);
+}
+
 // Density (and the DFSPH factor): rho_i = m sum_j W_ij + sum_b psi_b W_ib. WCSPH also sets
 // the pressure from the state equation; DFSPH leaves p to its pressure solve.
 //
@@ -398,9 +412,23 @@ void fluid_reach(Exec& ex, const SphParams P, FluidView& f) {
 // density); for DFSPH its gradient, Phi'(d) n = -A n, joins the wall gradient as the
 // integral of the samples' psi_b / rho0 grad W would, and the share of the support it fills
 // counts as wall neighbours.
+//
+// DFSPH: the fluid pairs' parts of two passes over the same pairs, taken here with the density
+// (WarmSums); those passes then skip their own loop over the pairs. The same terms, kernel and
+// list order give the same bits.
+struct WarmSums {
+  // The divergence solve's warm-start sweep, sum_j V (kappa_i + kappa_j) grad W_ij with kappa =
+  // warm_div (dfsph_apply's fluid_dv).
+  Vec3* div_dv = nullptr;
+  // The density solve's warm-start filter, sum_j W_ij and sum_j W_ij warm_dens_j
+  // (dfsph_smooth_warm's fluid_w, fluid_kw).
+  Real* dens_w = nullptr;
+  Real* dens_kw = nullptr;
+};
+
 template <class Exec>
 void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w,
-             bool with_alpha) {
+             bool with_alpha, const WarmSums warm = WarmSums()) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
     Real sum = 0, grad2 = 0;
@@ -423,12 +451,31 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     if (f.nbr) f.nbr_n[i] = kept ? count : -1;
     for (int k = count; k < end; ++k) list[k] = std::uint32_t(i);
     if (with_alpha) {
-      const auto s = sum_fluid_pairs<true, Both<Real, Both<Vec3, Real>>>(
-          f, g, P.kernel, i, xi, P.h2,
-          [&](const auto&, const auto&, const auto&, const auto& wk, const auto& grad) {
-            const auto gw = grad * P.volume;
-            return both(wk, both(gw, norm2(gw)));
-          });
+      auto alpha_terms = [&](const auto& wk, const auto& grad) {
+        const auto gw = grad * P.volume;
+        return both(wk, both(gw, norm2(gw)));
+      };
+      using AlphaSums = Both<Real, Both<Vec3, Real>>;
+      AlphaSums s;
+      if (warm.div_dv) {
+        const Real ki = f.warm_div[i];
+        const auto t = sum_fluid_pairs<true, Both<AlphaSums, Both<Vec3, Real>>>(
+            f, g, P.kernel, i, xi, P.h2,
+            [&](const auto& j, const auto&, const auto&, const auto& wk, const auto& grad) {
+              return both(alpha_terms(wk, grad), both(dfsph_pair_term(P, f.warm_div, ki, j, grad),
+                                                      warm_filter_term(f.warm_dens, j, wk)));
+            });
+        s = t.a;
+        warm.div_dv[i] = t.b.a;
+        warm.dens_w[i] = t.a.a;
+        warm.dens_kw[i] = t.b.b;
+      } else {
+        s = sum_fluid_pairs<true, AlphaSums>(
+            f, g, P.kernel, i, xi, P.h2,
+            [&](const auto&, const auto&, const auto&, const auto& wk, const auto& grad) {
+              return alpha_terms(wk, grad);
+            });
+      }
       sum = s.a;
       gsum = s.b.a;
       grad2 = s.b.b;
@@ -546,9 +593,14 @@ SPHFEM_HD Vec3 surface_stiffness(const SphParams& P, const NearSurface& s, Real 
 // Akinci et al. 2012 eq. 10 alone (p_i / rho_i^2) is too weak for the frozen-lattice walls:
 // particles sank into them and the bottom pressure doubled. Moving samples act alike with
 // the velocity relative to them; a surface without samples pushes by surface_pressure.
+//
+// DFSPH: with warm_k (the density solve's warm start, as dfsph_smooth_warm left it), the fluid
+// pairs' part of that solve's warm-start sweep goes to warm_dv (dfsph_apply's fluid_dv), summed
+// over the same pairs with the same bits; it reads no velocity.
 template <class Exec>
 void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w,
-                   bool with_pressure, Real dt) {
+                   bool with_pressure, Real dt, const Real* warm_k = nullptr,
+                   Vec3* warm_dv = nullptr) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i], vi = f.v[i];
     const Real rhoi = f.rho[i];
@@ -581,7 +633,16 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
         return select(r2 > Real(0), a, decltype(a){});
       };
       // W only for XSPH.
-      return sum_fluid_pairs<decltype(xsph)::value, Vec3>(f, g, P.kernel, i, xi, P.h2, pair);
+      constexpr bool W = decltype(xsph)::value;
+      if (!warm_k) return sum_fluid_pairs<W, Vec3>(f, g, P.kernel, i, xi, P.h2, pair);
+      const Real ki = warm_k[i];
+      const auto t = sum_fluid_pairs<W, Both<Vec3, Vec3>>(
+          f, g, P.kernel, i, xi, P.h2,
+          [&](const auto& j, const auto& r, const auto& r2, const auto& wk, const auto& gw) {
+            return both(pair(j, r, r2, wk, gw), dfsph_pair_term(P, warm_k, ki, j, gw));
+          });
+      warm_dv[i] = t.b;
+      return t.a;
     };
     using On = std::true_type;
     using Off = std::false_type;
@@ -856,15 +917,23 @@ int wall_density(Exec& ex, const SphParams P, const FluidView f, const GridView 
 // the pressure; the filter lets it decay while the smooth hydrostatic part passes unchanged.
 template <class Exec>
 void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const GridView g,
-                       const Walls w, Real rate, Real* out) {
+                       const Walls w, Real rate, Real* out, const Real* fluid_w = nullptr,
+                       const Real* fluid_kw = nullptr) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
-    const auto fluid = sum_fluid_pairs<true, Both<Real, Real>>(
-        f, g, P.kernel, i, xi, P.h2,
-        [&](const auto& j, const auto&, const auto&, const auto& wk, const auto&) {
-          return both(wk, wk * at(f.warm_dens, j));
-        });
-    Real sw = fluid.a, sk = fluid.b;
+    Real sw, sk;
+    if (fluid_w) {  // the fluid pairs' sums, taken by density() (WarmSums)
+      sw = fluid_w[i];
+      sk = fluid_kw[i];
+    } else {
+      const auto fluid = sum_fluid_pairs<true, Both<Real, Real>>(
+          f, g, P.kernel, i, xi, P.h2,
+          [&](const auto& j, const auto&, const auto&, const auto& wk, const auto&) {
+            return both(wk, warm_filter_term(f.warm_dens, j, wk));
+          });
+      sw = fluid.a;
+      sk = fluid.b;
+    }
     for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3&, Real r2) {
                        const Real wk = P.kernel.W(std::sqrt(r2));
@@ -928,17 +997,21 @@ void dfsph_remember(Exec& ex, FluidView f, Real weight, bool divergence) {
 // p_i = rho_i^2 / rho0 kappa_i (gauges, output). A surface without samples adds
 // kappa_i Phi'(d) n, the transpose of its term in the density change (dfsph_source), so the
 // update stays a projection; it carries no stiffness of its own (wall_accumulate).
+// fluid_dv: the fluid pairs' sum where a pass before has taken it (density(), warm_dv), else
+// nullptr.
 template <class Exec>
-void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w,
-                 Real dt) {
+void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w, Real dt,
+                 const Vec3* fluid_dv = nullptr) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
     const Real ki = f.kappa[i];
-    Vec3 dv = sum_fluid_pairs<false, Vec3>(
-        f, g, P.kernel, i, xi, P.h2,
-        [&](const auto& j, const auto&, const auto&, const auto&, const auto& gw) {
-          return gw * (P.volume * (ki + at(f.kappa, j)));
-        });
+    Vec3 dv = fluid_dv
+                  ? fluid_dv[i]
+                  : sum_fluid_pairs<false, Vec3>(
+                        f, g, P.kernel, i, xi, P.h2,
+                        [&](const auto& j, const auto&, const auto&, const auto&, const auto& gw) {
+                          return dfsph_pair_term(P, f.kappa, ki, j, gw);
+                        });
     for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        const Real k = dfsph_wall_pair(P, b, j, ki, b.kappa[j]);
