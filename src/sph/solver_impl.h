@@ -113,12 +113,11 @@ class SolverT final : public FluidSolver {
     const Walls w = walls();
     FluidView f = view();
     const GridView g = grid(fluid_.start.data());
-    // Under DFSPH the density pass also takes the fluid pairs' sums of the two warm starts
-    // (stages::WarmSums): the divergence solve's first sweep into a, free until the forces, and
-    // the density solve's filter into kappa and kappa_sum, free until the divergence solve.
+    // Under DFSPH the density pass also takes the fluid pairs' sums of the density solve's
+    // warm-start filter (stages::WarmSums), into kappa and kappa_sum, free until the divergence
+    // solve.
     stages::WarmSums warm;
     if (dfsph) {
-      warm.div_dv = fluid_.a.data();
       warm.dens_w = fluid_.kappa.data();
       warm.dens_kw = fluid_.ksum.data();
     }
@@ -446,9 +445,8 @@ class SolverT final : public FluidSolver {
       stages::wall_accumulate(ex_, b);
       if (mb.n) stages::wall_accumulate(ex_, mb);
     };
-    // The warm start: its fluid pairs were summed by the density pass (divergence) or the
-    // forces (density).
-    apply(divergence ? fluid_.a.data() : fluid_.tmp3.data());
+    // The warm start; the density solve's fluid pairs were summed with the forces.
+    apply(divergence ? nullptr : fluid_.tmp3.data());
     const int samples = n_ + active_walls_;
     int it = 0;
     last_error_ = 0;

@@ -392,7 +392,8 @@ void fluid_reach(Exec& ex, const SphParams P, FluidView& f) {
 }
 
 // The fluid pair's term of a sweep's velocity change (dfsph_apply): V (kappa_i + kappa_j)
-// grad W_ij, kappa the sweep's stiffness (density() sums it for the warm start's sweep).
+// grad W_ij, kappa the sweep's stiffness (accelerations() sums it for the density solve's
+// warm-start sweep).
 template <class J, class G>
 SPHFEM_HD_INLINE auto dfsph_pair_term(const SphParams& P, const Real* kappa, Real ki, const J& j,
                                       const G& grad) {
@@ -413,15 +414,11 @@ SPHFEM_HD_INLINE auto warm_filter_term(const Real* warm, const J& j, const R& wk
 // integral of the samples' psi_b / rho0 grad W would, and the share of the support it fills
 // counts as wall neighbours.
 //
-// DFSPH: the fluid pairs' parts of two passes over the same pairs, taken here with the density
-// (WarmSums); those passes then skip their own loop over the pairs. The same terms, kernel and
-// list order give the same bits.
+// DFSPH: the fluid pairs' sums of the density solve's warm-start filter, sum_j W_ij and sum_j
+// W_ij warm_dens_j (dfsph_smooth_warm's fluid_w, fluid_kw), taken here with the density; the
+// filter then skips its own loop over the pairs. The same terms, kernel and list order give the
+// same bits. nullptr: not taken.
 struct WarmSums {
-  // The divergence solve's warm-start sweep, sum_j V (kappa_i + kappa_j) grad W_ij with kappa =
-  // warm_div (dfsph_apply's fluid_dv).
-  Vec3* div_dv = nullptr;
-  // The density solve's warm-start filter, sum_j W_ij and sum_j W_ij warm_dens_j
-  // (dfsph_smooth_warm's fluid_w, fluid_kw).
   Real* dens_w = nullptr;
   Real* dens_kw = nullptr;
 };
@@ -457,18 +454,15 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
       };
       using AlphaSums = Both<Real, Both<Vec3, Real>>;
       AlphaSums s;
-      if (warm.div_dv) {
-        const Real ki = f.warm_div[i];
-        const auto t = sum_fluid_pairs<true, Both<AlphaSums, Both<Vec3, Real>>>(
+      if (warm.dens_w) {
+        const auto t = sum_fluid_pairs<true, Both<AlphaSums, Real>>(
             f, g, P.kernel, i, xi, P.h2,
             [&](const auto& j, const auto&, const auto&, const auto& wk, const auto& grad) {
-              return both(alpha_terms(wk, grad), both(dfsph_pair_term(P, f.warm_div, ki, j, grad),
-                                                      warm_filter_term(f.warm_dens, j, wk)));
+              return both(alpha_terms(wk, grad), warm_filter_term(f.warm_dens, j, wk));
             });
         s = t.a;
-        warm.div_dv[i] = t.b.a;
         warm.dens_w[i] = t.a.a;
-        warm.dens_kw[i] = t.b.b;
+        warm.dens_kw[i] = t.b;
       } else {
         s = sum_fluid_pairs<true, AlphaSums>(
             f, g, P.kernel, i, xi, P.h2,
@@ -997,8 +991,8 @@ void dfsph_remember(Exec& ex, FluidView f, Real weight, bool divergence) {
 // p_i = rho_i^2 / rho0 kappa_i (gauges, output). A surface without samples adds
 // kappa_i Phi'(d) n, the transpose of its term in the density change (dfsph_source), so the
 // update stays a projection; it carries no stiffness of its own (wall_accumulate).
-// fluid_dv: the fluid pairs' sum where a pass before has taken it (density(), warm_dv), else
-// nullptr.
+// fluid_dv: the fluid pairs' sum where a pass before has taken it (accelerations(), warm_dv),
+// else nullptr.
 template <class Exec>
 void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w, Real dt,
                  const Vec3* fluid_dv = nullptr) {
