@@ -607,7 +607,7 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
     const Vec3* v = f.v;
     // The pair sum with its switches fixed at compile time: a branch on a switch inside the
     // pair loop kept g++ from vectorising it.
-    auto pairs = [&, rho, p, v](auto press, auto av, auto xsph) {
+    auto pairs = [&, rho, p, v](auto press, auto av, auto xsph, auto warm) {
       auto pair = [&](const auto& j, const auto& r, const auto& r2, const auto& wk,
                       const auto& gw) {
         using R = std::decay_t<decltype(r2)>;
@@ -628,25 +628,32 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
       };
       // W only for XSPH.
       constexpr bool W = decltype(xsph)::value;
-      if (!warm_k) return sum_fluid_pairs<W, Vec3>(f, g, P.kernel, i, xi, P.h2, pair);
-      const Real ki = warm_k[i];
-      const auto t = sum_fluid_pairs<W, Both<Vec3, Vec3>>(
-          f, g, P.kernel, i, xi, P.h2,
-          [&](const auto& j, const auto& r, const auto& r2, const auto& wk, const auto& gw) {
-            return both(pair(j, r, r2, wk, gw), dfsph_pair_term(P, warm_k, ki, j, gw));
-          });
-      warm_dv[i] = t.b;
-      return t.a;
+      if (!decltype(warm)::value) {
+        return sum_fluid_pairs<W, Vec3>(f, g, P.kernel, i, xi, P.h2, pair);
+      } else {  // (not if constexpr: nvcc's lambdas may not capture there)
+        const Real ki = warm_k[i];
+        const auto t = sum_fluid_pairs<W, Both<Vec3, Vec3>>(
+            f, g, P.kernel, i, xi, P.h2,
+            [&](const auto& j, const auto& r, const auto& r2, const auto& wk, const auto& gw) {
+              return both(pair(j, r, r2, wk, gw), dfsph_pair_term(P, warm_k, ki, j, gw));
+            });
+        warm_dv[i] = t.b;
+        return t.a;
+      }
     };
     using On = std::true_type;
     using Off = std::false_type;
-    auto with_av = [&](auto press, auto xsph) {
-      return P.alpha_av > Real(0) ? pairs(press, On(), xsph) : pairs(press, Off(), xsph);
+    auto with_av = [&](auto press, auto xsph, auto warm) {
+      return P.alpha_av > Real(0) ? pairs(press, On(), xsph, warm)
+                                  : pairs(press, Off(), xsph, warm);
     };
-    auto with_xsph = [&](auto press) {
-      return P.xsph > Real(0) ? with_av(press, On()) : with_av(press, Off());
+    auto with_xsph = [&](auto press, auto warm) {
+      return P.xsph > Real(0) ? with_av(press, On(), warm) : with_av(press, Off(), warm);
     };
-    Vec3 acc = P.gravity + (with_pressure ? with_xsph(On()) : with_xsph(Off()));
+    // The pressure is WCSPH's, the warm-start sweep DFSPH's: never both.
+    Vec3 acc = P.gravity + (with_pressure ? with_xsph(On(), Off())
+                            : warm_k      ? with_xsph(Off(), On())
+                                          : with_xsph(Off(), Off()));
     for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        if (r2 <= Real(0)) return;
