@@ -10,6 +10,7 @@
 #include <fstream>
 #include <string>
 
+#include "bench_machine.h"
 #include "sphfem/io/atomic_file.h"
 #include "sphfem/scene/compile.h"
 #include "sphfem/sph/solver.h"
@@ -109,6 +110,14 @@ int run_bench(const BenchOptions& opt) {
                   device.c_str(), cpu_threads(), opt.backend.c_str(), name, solver->count(),
                   opt.steps, phases.c_str(), ms, mps, double(iters) / opt.steps);
     csv += line;
+  }
+  if (backend == Backend::Cpu) {
+    // After the runs, whose peak memory is already printed: the machine's speed at the time,
+    // against which results of other times are read (bench/results/README.md).
+    const MachineNow m = measure_machine(cpu_threads());
+    std::printf(
+        "\nmachine now: stream triad %.1f GB/s (%d threads), dependent multiply-add %.3f ns\n",
+        m.triad_gbs, m.threads, m.fma_chain_ns);
   }
   if (!opt.out_dir.empty()) {
     io::ensure_directory(opt.out_dir);
