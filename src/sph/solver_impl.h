@@ -116,6 +116,13 @@ class SolverT final : public FluidSolver {
     // Under DFSPH the density pass also takes the fluid pairs' sums of the density solve's
     // warm-start filter (stages::WarmSums), into kappa and kappa_sum, free until the divergence
     // solve.
+    // The list build's scan reads the positions as planes, laid out in a (free until the
+    // forces; the host only: a device scans one candidate a thread).
+    if (Exec::kSpace == MemSpace::Host) {
+      f.planes = &fluid_.a.data()[0].x;
+      f.planes_stride = std::size_t(fluid_.cap) + 1;
+      stages::position_planes(ex_, f);
+    }
     stages::WarmSums warm;
     if (dfsph) {
       warm.dens_w = fluid_.kappa.data();

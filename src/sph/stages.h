@@ -50,6 +50,10 @@ struct FluidView {
   int* nbr_n = nullptr;
   int nbr_cap = 0;
   std::size_t nbr_si = 0, nbr_sk = 0;
+  // The positions again as three planes of planes_stride Reals (x, y, z), for the list build's
+  // scan (collect_neighbors); nullptr: not there.
+  Real* planes = nullptr;
+  std::size_t planes_stride = 0;
   // Where the fluid's supports end this step (fluid_reach): no particle is within reach of a
   // point outside [reach_lo, reach_hi]. reached = 0: not known, every point may be.
   int reached = 0;
@@ -368,6 +372,17 @@ void cell_starts(Exec& ex, const std::uint32_t* keys, std::uint32_t* start, int 
   });
 }
 
+// The positions as three planes (FluidView::planes).
+template <class Exec>
+void position_planes(Exec& ex, const FluidView f) {
+  parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
+    const Vec3 x = f.x[i];
+    f.planes[i] = x.x;
+    f.planes[f.planes_stride + i] = x.y;
+    f.planes[2 * f.planes_stride + i] = x.z;
+  });
+}
+
 template <class Exec, class T>
 void gather(Exec& ex, const T* src, T* dst, const std::uint32_t* perm, int n) {
   parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) { dst[i] = src[perm[i]]; });
@@ -441,7 +456,8 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     if (f.nbr && step == 1 && i + kListAhead < f.n)
       lanes::prefetch_list<true>(list + kListAhead * f.nbr_si);
 #endif
-    const int count = collect_neighbors(g, f.x, xi, P.h2, list, step, last, 0);
+    const int count =
+        collect_neighbors(g, f.x, xi, P.h2, list, step, last, 0, f.planes, f.planes_stride);
     // The padding up to listed_end fits, as nbr_cap is a multiple of eight (FluidBuffers).
     const bool kept = f.nbr && count <= last;
     const int end = kept ? listed_end(f, count) : count;

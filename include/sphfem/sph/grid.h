@@ -124,8 +124,13 @@ inline constexpr std::array<std::uint64_t, 256> kPackHits = pack_hits_table();
 // mispredicted at every turn), and takes a row's distances a chunk at a time in a vectorised
 // loop first: the scan was half of a WCSPH step. With AVX2 the hits of eight candidates are
 // packed and stored at once (the scalar loop took seven instructions a candidate).
+//
+// planes: the same positions as three arrays (all x, then all y, then all z, each `stride`
+// long), or nullptr. The host reads eight candidates' coordinates there as three whole vectors
+// instead of taking apart eight Vec3s (six permutes and six blends), with the same arithmetic.
 SPHFEM_HD int collect_neighbors(const GridView& g, const Vec3* xs, const Vec3& xi, Real h2,
-                                std::uint32_t* list, std::size_t step, int last, int count) {
+                                std::uint32_t* list, std::size_t step, int last, int count,
+                                const Real* planes = nullptr, std::size_t stride = 0) {
   if (g.nx == 0) return count;
   const CellRows c(g, xi, h2);
   for (int z = c.z0; z <= c.z1; ++z)
@@ -148,11 +153,20 @@ SPHFEM_HD int collect_neighbors(const GridView& g, const Vec3* xs, const Vec3& x
         // vectorise member reads of a struct array.
         static_assert(sizeof(Vec3) == 3 * sizeof(Real), "Vec3 read as three Reals");
         Real r2[kChunk];
-        const Real* x = &xs[j0].x;
+        if (planes) {
+          const Real *px = planes + j0, *py = px + stride, *pz = py + stride;
 #pragma omp simd
-        for (int k = 0; k < m; ++k) {
-          const Real dx = xi.x - x[3 * k], dy = xi.y - x[3 * k + 1], dz = xi.z - x[3 * k + 2];
-          r2[k] = dx * dx + dy * dy + dz * dz;
+          for (int k = 0; k < m; ++k) {
+            const Real dx = xi.x - px[k], dy = xi.y - py[k], dz = xi.z - pz[k];
+            r2[k] = dx * dx + dy * dy + dz * dz;
+          }
+        } else {
+          const Real* x = &xs[j0].x;
+#pragma omp simd
+          for (int k = 0; k < m; ++k) {
+            const Real dx = xi.x - x[3 * k], dy = xi.y - x[3 * k + 1], dz = xi.z - x[3 * k + 2];
+            r2[k] = dx * dx + dy * dy + dz * dz;
+          }
         }
         if (step == 1 && count + m <= last) {
           int k = 0;
