@@ -113,9 +113,6 @@ class SolverT final : public FluidSolver {
     const Walls w = walls();
     FluidView f = view();
     const GridView g = grid(fluid_.start.data());
-    // Under DFSPH the density pass also takes the fluid pairs' sums of the density solve's
-    // warm-start filter (stages::WarmSums), into kappa and kappa_sum, free until the divergence
-    // solve.
     // The list build's scan reads the positions as planes, laid out in a (free until the
     // forces; the host only: a device scans one candidate a thread).
     if (Exec::kSpace == MemSpace::Host) {
@@ -123,6 +120,9 @@ class SolverT final : public FluidSolver {
       f.planes_stride = std::size_t(fluid_.cap) + 1;
       stages::position_planes(ex_, f);
     }
+    // Under DFSPH the density pass also takes the fluid pairs' sums of the density solve's
+    // warm-start filter (stages::WarmSums), into kappa and kappa_sum, free until the divergence
+    // solve.
     stages::WarmSums warm;
     if (dfsph) {
       warm.dens_w = fluid_.kappa.data();
