@@ -154,8 +154,8 @@ class SolverT final : public FluidSolver {
     // sums are the density pass's, in kappa and kappa_sum, which the solve below takes over);
     // pressure() makes it the warm start.
     const Real rate = Real(std::min(1.0, stages::kDfsphWarmSmoothing * warm_weight()));
-    stages::dfsph_smooth_warm(ex_, P_, view(), grid(fluid_.start.data()), w, rate,
-                              fluid_.tmpr.data(), fluid_.kappa.data(), fluid_.ksum.data());
+    stages::dfsph_smooth_warm(ex_, P_, view(), w, rate, fluid_.kappa.data(), fluid_.ksum.data(),
+                              fluid_.tmpr.data());
     info.divergence_iterations = solve(view(), grid(fluid_.start.data()), w, Real(dt_), pace_, true,
                                        model_.divergence_tolerance);
     if (w.moving.n)
@@ -177,7 +177,7 @@ class SolverT final : public FluidSolver {
     // DFSPH: the fluid pairs of the density solve's warm-start sweep, summed here into tmp3
     // (FluidView::gwall, spent since wall_density) and applied by pressure().
     if (wcsph)
-      stages::accelerations(ex_, P_, f, g, w, true, rdt);
+      stages::accelerations(ex_, P_, f, g, w, true, rdt, nullptr, nullptr);
     else
       stages::accelerations(ex_, P_, f, g, w, false, rdt, fluid_.tmpr.data(), fluid_.tmp3.data());
     if (w.moving.n)

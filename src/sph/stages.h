@@ -415,12 +415,6 @@ SPHFEM_HD_INLINE auto dfsph_pair_term(const SphParams& P, const Real* kappa, Rea
   return grad * (P.volume * (ki + at(kappa, j)));
 }
 
-// The fluid pair's weighted warm start of the density solve's filter (dfsph_smooth_warm).
-template <class J, class R>
-SPHFEM_HD_INLINE auto warm_filter_term(const Real* warm, const J& j, const R& wk) {
-  return wk * at(warm, j);
-}
-
 // Density (and the DFSPH factor): rho_i = m sum_j W_ij + sum_b psi_b W_ib. WCSPH also sets
 // the pressure from the state equation; DFSPH leaves p to its pressure solve.
 //
@@ -429,10 +423,9 @@ SPHFEM_HD_INLINE auto warm_filter_term(const Real* warm, const J& j, const R& wk
 // integral of the samples' psi_b / rho0 grad W would, and the share of the support it fills
 // counts as wall neighbours.
 //
-// DFSPH: the fluid pairs' sums of the density solve's warm-start filter, sum_j W_ij and sum_j
-// W_ij warm_dens_j (dfsph_smooth_warm's fluid_w, fluid_kw), taken here with the density; the
-// filter then skips its own loop over the pairs. The same terms, kernel and list order give the
-// same bits. nullptr: not taken.
+// DFSPH (with_alpha) also takes the fluid pairs' sums of the density solve's warm-start filter,
+// sum_j W_ij and sum_j W_ij warm_dens_j, into warm (dfsph_smooth_warm's fluid_w, fluid_kw): the
+// filter has no loop over the pairs of its own.
 struct WarmSums {
   Real* dens_w = nullptr;
   Real* dens_kw = nullptr;
@@ -464,28 +457,15 @@ void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const W
     if (f.nbr) f.nbr_n[i] = kept ? count : -1;
     for (int k = count; k < end; ++k) list[k] = std::uint32_t(i);
     if (with_alpha) {
-      auto alpha_terms = [&](const auto& wk, const auto& grad) {
-        const auto gw = grad * P.volume;
-        return both(wk, both(gw, norm2(gw)));
-      };
-      using AlphaSums = Both<Real, Both<Vec3, Real>>;
-      AlphaSums s;
-      if (warm.dens_w) {
-        const auto t = sum_fluid_pairs<true, Both<AlphaSums, Real>>(
-            f, g, P.kernel, i, xi, P.h2,
-            [&](const auto& j, const auto&, const auto&, const auto& wk, const auto& grad) {
-              return both(alpha_terms(wk, grad), warm_filter_term(f.warm_dens, j, wk));
-            });
-        s = t.a;
-        warm.dens_w[i] = t.a.a;
-        warm.dens_kw[i] = t.b;
-      } else {
-        s = sum_fluid_pairs<true, AlphaSums>(
-            f, g, P.kernel, i, xi, P.h2,
-            [&](const auto&, const auto&, const auto&, const auto& wk, const auto& grad) {
-              return alpha_terms(wk, grad);
-            });
-      }
+      const auto t = sum_fluid_pairs<true, Both<Both<Real, Both<Vec3, Real>>, Real>>(
+          f, g, P.kernel, i, xi, P.h2,
+          [&](const auto& j, const auto&, const auto&, const auto& wk, const auto& grad) {
+            const auto gw = grad * P.volume;
+            return both(both(wk, both(gw, norm2(gw))), wk * at(f.warm_dens, j));
+          });
+      const auto& s = t.a;
+      warm.dens_w[i] = s.a;
+      warm.dens_kw[i] = t.b;
       sum = s.a;
       gsum = s.b.a;
       grad2 = s.b.b;
@@ -604,13 +584,13 @@ SPHFEM_HD Vec3 surface_stiffness(const SphParams& P, const NearSurface& s, Real 
 // particles sank into them and the bottom pressure doubled. Moving samples act alike with
 // the velocity relative to them; a surface without samples pushes by surface_pressure.
 //
-// DFSPH: with warm_k (the density solve's warm start, as dfsph_smooth_warm left it), the fluid
-// pairs' part of that solve's warm-start sweep goes to warm_dv (dfsph_apply's fluid_dv), summed
-// over the same pairs with the same bits; it reads no velocity.
+// DFSPH (without the pressure): the fluid pairs' part of the density solve's warm-start sweep
+// with warm_k (its warm start, as dfsph_smooth_warm left it) goes to warm_dv (dfsph_apply's
+// fluid_dv), summed over the same pairs with the same bits; it reads no velocity. WCSPH:
+// nullptr, nullptr.
 template <class Exec>
 void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w,
-                   bool with_pressure, Real dt, const Real* warm_k = nullptr,
-                   Vec3* warm_dv = nullptr) {
+                   bool with_pressure, Real dt, const Real* warm_k, Vec3* warm_dv) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i], vi = f.v[i];
     const Real rhoi = f.rho[i];
@@ -623,7 +603,7 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
     const Vec3* v = f.v;
     // The pair sum with its switches fixed at compile time: a branch on a switch inside the
     // pair loop kept g++ from vectorising it.
-    auto pairs = [&, rho, p, v](auto press, auto av, auto xsph, auto warm) {
+    auto pairs = [&, rho, p, v](auto press, auto av, auto xsph) {
       auto pair = [&](const auto& j, const auto& r, const auto& r2, const auto& wk,
                       const auto& gw) {
         using R = std::decay_t<decltype(r2)>;
@@ -644,7 +624,7 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
       };
       // W only for XSPH.
       constexpr bool W = decltype(xsph)::value;
-      if (!decltype(warm)::value) {
+      if (decltype(press)::value) {  // WCSPH; DFSPH takes the warm-start sweep along
         return sum_fluid_pairs<W, Vec3>(f, g, P.kernel, i, xi, P.h2, pair);
       } else {  // (not if constexpr: nvcc's lambdas may not capture there)
         const Real ki = warm_k[i];
@@ -659,17 +639,13 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
     };
     using On = std::true_type;
     using Off = std::false_type;
-    auto with_av = [&](auto press, auto xsph, auto warm) {
-      return P.alpha_av > Real(0) ? pairs(press, On(), xsph, warm)
-                                  : pairs(press, Off(), xsph, warm);
+    auto with_av = [&](auto press, auto xsph) {
+      return P.alpha_av > Real(0) ? pairs(press, On(), xsph) : pairs(press, Off(), xsph);
     };
-    auto with_xsph = [&](auto press, auto warm) {
-      return P.xsph > Real(0) ? with_av(press, On(), warm) : with_av(press, Off(), warm);
+    auto with_xsph = [&](auto press) {
+      return P.xsph > Real(0) ? with_av(press, On()) : with_av(press, Off());
     };
-    // The pressure is WCSPH's, the warm-start sweep DFSPH's: never both.
-    Vec3 acc = P.gravity + (with_pressure ? with_xsph(On(), Off())
-                            : warm_k      ? with_xsph(Off(), On())
-                                          : with_xsph(Off(), Off()));
+    Vec3 acc = P.gravity + (with_pressure ? with_xsph(On()) : with_xsph(Off()));
     for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        if (r2 <= Real(0)) return;
@@ -932,25 +908,13 @@ int wall_density(Exec& ex, const SphParams P, const FluidView f, const GridView 
 // cannot see a stiffness that alternates layer by layer (on the lattice its SPH gradient
 // vanishes), so once in the warm start it stayed there and showed as a static +-5 % zigzag in
 // the pressure; the filter lets it decay while the smooth hydrostatic part passes unchanged.
+// The fluid's sums come from density() (WarmSums: fluid_w, fluid_kw); this pass adds the walls'.
 template <class Exec>
-void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const GridView g,
-                       const Walls w, Real rate, Real* out, const Real* fluid_w = nullptr,
-                       const Real* fluid_kw = nullptr) {
+void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const Walls w, Real rate,
+                       const Real* fluid_w, const Real* fluid_kw, Real* out) {
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
-    Real sw, sk;
-    if (fluid_w) {  // the fluid pairs' sums, taken by density() (WarmSums)
-      sw = fluid_w[i];
-      sk = fluid_kw[i];
-    } else {
-      const auto fluid = sum_fluid_pairs<true, Both<Real, Real>>(
-          f, g, P.kernel, i, xi, P.h2,
-          [&](const auto& j, const auto&, const auto&, const auto& wk, const auto&) {
-            return both(wk, warm_filter_term(f.warm_dens, j, wk));
-          });
-      sw = fluid.a;
-      sk = fluid.b;
-    }
+    Real sw = fluid_w[i], sk = fluid_kw[i];
     for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3&, Real r2) {
                        const Real wk = P.kernel.W(std::sqrt(r2));
