@@ -76,7 +76,8 @@ TEST(SphNeighbors, GridSearchEqualsBruteForce) {
 TEST(SphNeighbors, ListsFromPlanesAndFromVectorsEqualTheScan) {
   const SortedCloud c;
   CpuExec ex;
-  std::vector<Real> planes(3 * std::size_t(c.n));
+  // Seven Reals past the z plane: the host's groups of eight read there (FluidView::planes).
+  std::vector<Real> planes(3 * std::size_t(c.n) + 7);
   stages::FluidView f;
   f.n = c.n;
   f.x = const_cast<Vec3*>(c.xs.data());

@@ -44,7 +44,10 @@ struct FluidBuffers {
     cap = capacity;
     // One Vec3 more than the particles: the host's pair lanes read a fourth Real past x_j
     // (lanes::at). They swap with each other, so all four have it.
-    for (Buffer<Vec3>* b : {&x, &v, &a, &tmp3}) *b = Buffer<Vec3>(s, std::size_t(cap) + 1);
+    for (Buffer<Vec3>* b : {&x, &v, &tmp3}) *b = Buffer<Vec3>(s, std::size_t(cap) + 1);
+    // a also holds the positions as planes for the list build, which reads up to seven Reals
+    // past the last plane's end (collect_from_planes): two Vec3s more.
+    a = Buffer<Vec3>(s, std::size_t(cap) + 3);
     for (Buffer<Real>* b : {&rho, &p, &alpha, &kappa, &ksum, &warm_div, &warm_dens, &tmpr})
       *b = Buffer<Real>(s, cap);
     warm_div.zero();

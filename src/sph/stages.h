@@ -51,7 +51,8 @@ struct FluidView {
   int nbr_cap = 0;
   std::size_t nbr_si = 0, nbr_sk = 0;
   // The positions again as three planes of planes_stride Reals (x, y, z), for the list build's
-  // scan (collect_neighbors); nullptr: not there.
+  // scan (collect_neighbors), with seven readable Reals after the z plane's n; nullptr: not
+  // there.
   Real* planes = nullptr;
   std::size_t planes_stride = 0;
   // Where the fluid's supports end this step (fluid_reach): no particle is within reach of a
