@@ -161,11 +161,11 @@ inline int collect_from_planes(const GridView& g, const Vec3& xi, Real h2, std::
     const F8 dy = cy - F8(_mm256_loadu_ps(py + j0));
     const F8 dz = cz - F8(_mm256_loadu_ps(pz + j0));
     const F8 r2 = dx * dx + dy * dy + dz * dz;
-    const int hits = _mm256_movemask_ps(_mm256_and_ps(
-        _mm256_cmp_ps(__m256(r2), lim, _CMP_LT_OQ), _mm256_castsi256_ps(in_row)));
+    const int hits = _mm256_movemask_ps(
+        _mm256_and_ps(_mm256_cmp_ps(__m256(r2), lim, _CMP_LT_OQ), _mm256_castsi256_ps(in_row)));
     if (count + 8 <= last) {
-      const __m256i to_front = _mm256_cvtepu8_epi32(
-          _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kPackHits[hits])));
+      const __m256i to_front =
+          _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kPackHits[hits])));
       const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(int(j0)), lane);
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(list + count),
                           _mm256_permutevar8x32_epi32(idx, to_front));
