@@ -30,8 +30,8 @@ constexpr double kWidth = 0.2, kDepth = 0.3;  // the column: kWidth^2 wide, kDep
 constexpr double kSettle = 1.5;               // s before the 0.1 s of averaged snapshots
 
 // The half-space integrals: Phi(0) = a(0) = 1/2 (half of the kernel's mass and of the
-// identity), zero beyond the support, and Phi, a against brute-force sums over a fine
-// lattice, A = -dPhi/dd against 2 pi int_d^h r W dr by the midpoint rule.
+// identity), zero beyond the support, and Phi, a and the first moment M against brute-force
+// sums over a fine lattice, A = -dPhi/dd against 2 pi int_d^h r W dr by the midpoint rule.
 TEST(SphNearSurface, HalfSpaceTableMatchesBruteForce) {
   for (int kind : {0, 1}) {
     const std::vector<Real> t = half_space_table(Kernel(kind, Real(1)), 256);
@@ -51,7 +51,7 @@ TEST(SphNearSurface, HalfSpaceTableMatchesBruteForce) {
     const double c = kH / m;
     for (double q : {0.125, 0.25, 0.5, 0.75}) {  // planes between lattice layers
       const double d = q * kH;
-      double sum = 0, tnn = 0;
+      double sum = 0, tnn = 0, depth = 0;
       long all = 0, beyond = 0;
       for (int i = -m; i < m; ++i)
         for (int j = -m; j < m; ++j)
@@ -64,6 +64,7 @@ TEST(SphNearSurface, HalfSpaceTableMatchesBruteForce) {
             if (double(r.z) <= d) continue;
             ++beyond;
             sum += double(k.W(rr)) * c * c * c;
+            depth += double(r.z) * double(k.W(rr)) * c * c * c;
             // -W'(r) / r = -(grad W . r) / r^2
             tnn += double(r.z) * double(r.z) * -double(dot(k.grad(r, rr), r)) /
                    (double(rr) * double(rr)) * c * c * c;
@@ -77,6 +78,7 @@ TEST(SphNearSurface, HalfSpaceTableMatchesBruteForce) {
       hv.lookup(Real(d), phi, slope, normal);
       EXPECT_NEAR(phi, sum, 2e-3) << "kernel " << kind << " q " << q;
       EXPECT_NEAR(normal, tnn, 2e-3) << "kernel " << kind << " q " << q;
+      EXPECT_NEAR(hv.moment(Real(d)), depth, 5e-3 * depth) << "kernel " << kind << " q " << q;
       EXPECT_NEAR(slope, slab, 1e-3 * slab) << "kernel " << kind << " q " << q;
       EXPECT_NEAR(half_space_volume(Real(q)), double(beyond) / double(all), 2e-3);
     }

@@ -766,7 +766,9 @@ constexpr double kDfsphWarmTime = 0.3;
 // what the memory lets in at a fixed ratio, so the warm start's bias at a surface without
 // samples (a one-sided average) stays the same however slow the mean: 0.3 a step at the old
 // weight 0.05 a step; kept at 0.3 a step when the mean slowed, the bottom pressure on a
-// triangle-mesh floor rose from -1 % to +9 %.
+// triangle-mesh floor rose from -1 % to +9 %. (That bias is gone since the filter continues
+// a surface's far side; 12 then gave a better hydrostatic tank but a sampled cup whose bottom
+// pressure swung by -5 % to +7 % over the lanes' summation orders, against -1 % to +5 % with 6.)
 constexpr double kDfsphWarmSmoothing = 6.0;
 
 // Coefficient of grad W_ib in a DFSPH velocity update of particle i from wall sample b: the
@@ -904,11 +906,12 @@ int wall_density(Exec& ex, const SphParams P, const FluidView f, const GridView 
   return int(active + 0.5);
 }
 
-// Partial Shepard filter of the density solve's warm start, fluid and wall samples together:
-// warm_i += rate (sum_j warm_j W_ij / sum_j W_ij - warm_i), into out. The sweeps
-// cannot see a stiffness that alternates layer by layer (on the lattice its SPH gradient
-// vanishes), so once in the warm start it stayed there and showed as a static +-5 % zigzag in
-// the pressure; the filter lets it decay while the smooth hydrostatic part passes unchanged.
+// Partial Shepard filter of the density solve's warm start, fluid, wall samples and the far side
+// of a surface without samples together: warm_i += rate (sum_j warm_j W_ij / sum_j W_ij -
+// warm_i), into out. The sweeps cannot see a stiffness that alternates layer by layer (on the
+// lattice its SPH gradient vanishes), so once in the warm start it stayed there and showed as
+// a static +-5 % zigzag in the pressure; the filter lets it decay while the smooth hydrostatic
+// part passes unchanged.
 // The fluid's sums come from density() (WarmSums: fluid_w, fluid_kw); this pass adds the walls'.
 template <class Exec>
 void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const Walls w, Real rate,
@@ -923,6 +926,17 @@ void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const Wal
                        sk += wk * b.warm_dens[j];
                      });
     const Real own = f.warm_dens[i];
+    // A surface without samples: the space beyond it as the tank's samples would fill it,
+    // with the particle's own warm start continued by the hydrostatic head (as wall_density
+    // gives the samples). Without it the average was one-sided there and pulled the bottom
+    // layer's warm start toward the lower values above it.
+    NearSurface s;
+    if (near_surface(w.surface, i, s)) {
+      const Real beyond = P.rho0 / P.mass;  // sum_b W_ib = beyond Phi
+      const Real head = -dot(P.gravity, s.n) * w.surface.half.moment(s.q * P.h);
+      sw += beyond * s.phi;
+      sk += beyond * (s.phi * own + head);
+    }
     out[i] = own + rate * (sk / sw - own);
   });
 }

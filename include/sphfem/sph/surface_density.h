@@ -13,6 +13,9 @@
 //   A(d)   = -dPhi/dd = c s sum_k 2 pi z_k W(z_k)
 //   T      = sum_beyond psi/rho0 (y - x) (x) grad_x W = a(d) n n^T + Phi(d) (I - n n^T),
 //   a(d)   = c s sum_k 2 pi z_k^2 W(z_k)     (continuum: a(0) = Phi(0) = 1/2)
+//   M(d)   = c s sum_k z_k A(z_k)            = sum_beyond psi/rho0 W (x - y) . n, the first
+//            moment: the head of a quantity continued beyond the surface (the warm start's
+//            filter, stages.h)
 // T carries the hydrostatic head of the pressure continued beyond the surface (stages.h).
 // Why layers and not the continuum integral: a lattice layer at d = s / 2, the fluid at
 // rest, must have rest density. The continuum gives it +3.8 % (cubic spline) or +4.8 %
@@ -26,9 +29,9 @@
 namespace sphfem {
 
 // Rows of the table, each sampled at q = k / n, k = 0..n.
-enum HalfSpaceRow { kHalfPhi = 0, kHalfSlope = 1, kHalfNormal = 2, kHalfRows = 3 };
+enum HalfSpaceRow { kHalfPhi = 0, kHalfSlope = 1, kHalfNormal = 2, kHalfMoment = 3, kHalfRows = 4 };
 
-// Phi(q), h A(q) and a(q) for h = 1 (all three are dimensionless), row after row. layer:
+// Phi(q), h A(q), a(q) and M(q) / h for h = 1 (all dimensionless), row after row. layer:
 // the lattice spacing over h (0: the continuum integrals); mass: m / (rho0 s^3).
 std::vector<Real> half_space_table(const Kernel& kernel, int n, double layer = 0, double mass = 1);
 
@@ -53,6 +56,16 @@ struct HalfSpaceView {
     phi = r0[0] + t * (r0[1] - r0[0]);
     slope = (r1[0] + t * (r1[1] - r1[0])) * inv_h;
     normal = r2[0] + t * (r2[1] - r2[0]);
+  }
+  // M(d) (m) for a particle at distance d >= 0; zero at and beyond the support.
+  SPHFEM_HD Real moment(Real d) const {
+    Real u = d * inv_h * Real(n);
+    if (!(u < Real(n))) return Real(0);
+    if (u < Real(0)) u = Real(0);
+    const int k = int(u);
+    const Real t = u - Real(k);
+    const Real* r = table + (n + 1) * kHalfMoment + k;
+    return (r[0] + t * (r[1] - r[0])) / inv_h;
   }
 };
 
