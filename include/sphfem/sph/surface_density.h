@@ -45,27 +45,33 @@ struct HalfSpaceView {
   // Zero at and beyond the support.
   SPHFEM_HD void lookup(Real d, Real& phi, Real& slope, Real& normal) const {
     phi = slope = normal = Real(0);
-    Real u = d * inv_h * Real(n);
-    if (!(u < Real(n))) return;
-    if (u < Real(0)) u = Real(0);
-    const int k = int(u);
-    const Real t = u - Real(k);
-    const Real* r0 = table + k;
-    const Real* r1 = table + (n + 1) * kHalfSlope + k;
-    const Real* r2 = table + (n + 1) * kHalfNormal + k;
-    phi = r0[0] + t * (r0[1] - r0[0]);
-    slope = (r1[0] + t * (r1[1] - r1[0])) * inv_h;
-    normal = r2[0] + t * (r2[1] - r2[0]);
+    int k;
+    Real t;
+    if (!place(d, k, t)) return;
+    phi = row_at(kHalfPhi, k, t);
+    slope = row_at(kHalfSlope, k, t) * inv_h;
+    normal = row_at(kHalfNormal, k, t);
   }
   // M(d) (m) for a particle at distance d >= 0; zero at and beyond the support.
   SPHFEM_HD Real moment(Real d) const {
+    int k;
+    Real t;
+    return place(d, k, t) ? row_at(kHalfMoment, k, t) / inv_h : Real(0);
+  }
+
+ private:
+  // The table's interval k and the fraction t of it at distance d; false beyond the support.
+  SPHFEM_HD bool place(Real d, int& k, Real& t) const {
     Real u = d * inv_h * Real(n);
-    if (!(u < Real(n))) return Real(0);
+    if (!(u < Real(n))) return false;
     if (u < Real(0)) u = Real(0);
-    const int k = int(u);
-    const Real t = u - Real(k);
-    const Real* r = table + (n + 1) * kHalfMoment + k;
-    return (r[0] + t * (r[1] - r[0])) / inv_h;
+    k = int(u);
+    t = u - Real(k);
+    return true;
+  }
+  SPHFEM_HD Real row_at(int row, int k, Real t) const {
+    const Real* r = table + (n + 1) * row + k;
+    return r[0] + t * (r[1] - r[0]);
   }
 };
 
