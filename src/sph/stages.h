@@ -912,7 +912,8 @@ int wall_density(Exec& ex, const SphParams P, const FluidView f, const GridView 
 // lattice its SPH gradient vanishes), so once in the warm start it stayed there and showed as
 // a static +-5 % zigzag in the pressure; the filter lets it decay while the smooth hydrostatic
 // part passes unchanged.
-// The fluid's sums come from density() (WarmSums: fluid_w, fluid_kw); this pass adds the walls'.
+// The fluid's sums come from density() (WarmSums: fluid_w, fluid_kw); this pass adds the walls'
+// and a surface's.
 template <class Exec>
 void dfsph_smooth_warm(Exec& ex, const SphParams P, const FluidView f, const Walls w, Real rate,
                        const Real* fluid_w, const Real* fluid_kw, Real* out) {
