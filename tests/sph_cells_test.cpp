@@ -56,13 +56,17 @@ TEST(SphCells, CellStartsEqualBruteForce) {
   }
 }
 
-// density() stores each particle's fluid neighbours; for_fluid_neighbors and for_fluid_pairs
-// (with the kernel's values) must give them back in the grid's order, in either layout, and
-// they must be the brute-force neighbour set.
-void check_lists(int nbr_cap_override) {
-  CpuExec ex;
-  const Real h = Real(0.1), d = Real(0.05);
+// A jittered lattice block with a denser corner, inside a larger grid with empty cells.
+struct ListScene {
   SphParams P;
+  std::vector<Vec3> x;
+  GridView g;
+};
+
+ListScene list_scene() {
+  ListScene s;
+  const Real h = Real(0.1), d = Real(0.05);
+  SphParams& P = s.P;
   P.kernel = Kernel(0, h);
   P.h = h;
   P.h2 = h * h;
@@ -72,25 +76,34 @@ void check_lists(int nbr_cap_override) {
   P.volume = P.mass / P.rho0;
   P.stiffness = 1000;
   P.full_neighbors = 33;
-
-  // A jittered lattice block with a denser corner, inside a larger grid with empty cells.
+  std::vector<Vec3>& x = s.x;
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> jit(-0.2f, 0.2f), u(0.05f, 0.35f);
-  std::vector<Vec3> x;
   for (int k = 0; k < 10; ++k)
     for (int j = 0; j < 10; ++j)
       for (int i = 0; i < 10; ++i)
         x.push_back(Vec3(Real(0.2) + d * (Real(i) + jit(rng)), Real(0.2) + d * (Real(j) + jit(rng)),
                          Real(0.2) + d * (Real(k) + jit(rng))));
   for (int i = 0; i < 60; ++i) x.push_back(Vec3(u(rng), u(rng), u(rng)));
-  const int n = int(x.size());
+  s.g.lo = Vec3(0, 0, 0);
+  s.g.inv_cell = Real(1) / h;
+  s.g.nx = 12;
+  s.g.ny = 9;
+  s.g.nz = 10;
+  return s;
+}
 
-  GridView g;
-  g.lo = Vec3(0, 0, 0);
-  g.inv_cell = Real(1) / h;
-  g.nx = 12;
-  g.ny = 9;
-  g.nz = 10;
+// density() stores each particle's fluid neighbours; for_fluid_neighbors and for_fluid_pairs
+// (with the kernel's values) must give them back in the grid's order, in either layout, and
+// they must be the brute-force neighbour set.
+void check_lists(int nbr_cap_override) {
+  CpuExec ex;
+  const ListScene scene = list_scene();
+  const SphParams& P = scene.P;
+  const Real h = P.h;
+  const std::vector<Vec3>& x = scene.x;
+  GridView g = scene.g;
+  const int n = int(x.size());
   const int cap = n + 37;  // the interleaved stride is the capacity, not n
   FluidBuffers fb;
   fb.allocate(MemSpace::Host, cap, P.full_neighbors, g.cells());
@@ -107,23 +120,41 @@ void check_lists(int nbr_cap_override) {
   for (int j = 0; j < cap; ++j) q[std::size_t(j)] = Real(1) + Real(0.01) * Real(j % 97);
 
   stages::FluidView host = fb.view(n);
-  ASSERT_EQ(host.nbr_si, std::size_t(fb.nbr_cap));
+  ASSERT_NE(host.nbr_at, nullptr);
   ASSERT_EQ(host.nbr_sk, std::size_t(1));
   stages::Walls walls;
-  stages::density(ex, P, host, g, walls, /*with_alpha=*/false);
-  // Kept aside: the second run below writes the same buffer in the other layout.
+  // The host packs the lists (its pool starts too small for them: the pass runs again).
+  fb.list_and_density(ex, P, host, g, walls, /*with_alpha=*/false);
+  // Kept aside: the second run below writes the counts in the other layout.
   std::vector<std::uint32_t> host_list(fb.nbr.data(), fb.nbr.data() + fb.nbr.size());
+  std::vector<std::uint32_t> host_at(fb.nbr_at.data(), fb.nbr_at.data() + n);
   std::vector<int> host_n(fb.nbr_n.data(), fb.nbr_n.data() + n);
   const std::vector<Real> host_rho(fb.rho.data(), fb.rho.data() + n);
+  // Packed: one list after another, none overlapping, the pool (once grown) no larger than an
+  // eighth beyond what they take, scaled from the particles to the capacity.
+  std::size_t packed = 0;
+  for (int i = 0; i < n; ++i) packed += std::size_t(stages::list_entries(host, i));
+  EXPECT_LE(double(fb.nbr.size()), std::max(1.125 * double(packed) * cap / n + 1.0,
+                                            double(cap) * FluidBuffers::kFirstListRoom));
+  std::vector<int> owner(fb.nbr.size(), -1);
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < stages::list_entries(host, i); ++k) {
+      ASSERT_LT(host_at[std::size_t(i)] + std::size_t(k), owner.size());
+      ASSERT_EQ(owner[host_at[std::size_t(i)] + std::size_t(k)], -1) << "particle " << i;
+      owner[host_at[std::size_t(i)] + std::size_t(k)] = i;
+    }
 
-  // A device's layout: entry k of particle i at k * cap + i.
+  // A device's layout: entry k of particle i at k * cap + i, room for nbr_cap each.
+  std::vector<std::uint32_t> dev_list(std::size_t(cap) * std::size_t(fb.nbr_cap), 0xffffffffu);
   stages::FluidView dev = host;
+  dev.nbr = dev_list.data();
+  dev.nbr_at = nullptr;
   dev.nbr_si = 1;
   dev.nbr_sk = std::size_t(cap);
-  std::fill(fb.nbr.data(), fb.nbr.data() + fb.nbr.size(), 0xffffffffu);
   stages::density(ex, P, dev, g, walls, /*with_alpha=*/false);
 
   host.nbr = host_list.data();
+  host.nbr_at = host_at.data();
   host.nbr_n = host_n.data();
   const Vec3* xs = fb.x.data();
   int overflowed = 0;
@@ -183,9 +214,8 @@ void check_lists(int nbr_cap_override) {
     } else {
       ASSERT_EQ(m, int(grid_order.size()));
       for (int k = 0; k < m; ++k) {
-        ASSERT_EQ(host_list[std::size_t(i) * std::size_t(fb.nbr_cap) + std::size_t(k)],
-                  grid_order[std::size_t(k)]);
-        ASSERT_EQ(fb.nbr.data()[std::size_t(k) * std::size_t(cap) + std::size_t(i)],
+        ASSERT_EQ(host_list[host_at[std::size_t(i)] + std::size_t(k)], grid_order[std::size_t(k)]);
+        ASSERT_EQ(dev_list[std::size_t(k) * std::size_t(cap) + std::size_t(i)],
                   grid_order[std::size_t(k)]);
       }
     }
@@ -201,6 +231,59 @@ void check_lists(int nbr_cap_override) {
 }
 
 TEST(SphCells, NeighbourListsInBothLayoutsEqualBruteForce) { check_lists(0); }
+
+// DFSPH's passes read each pair's kernel factor where the density pass stored it: their sums
+// must be those of the kernel evaluated again, to the bit, for both kernels.
+TEST(SphCells, StoredKernelFactorsGiveTheKernelsBits) {
+  CpuExec ex;
+  ListScene scene = list_scene();
+  const int n = int(scene.x.size());
+  std::vector<Vec3> v(scene.x.size());
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1, 1);
+  for (Vec3& vi : v) vi = Vec3(u(rng), u(rng), u(rng));
+  for (const int kind : {0, 1}) {
+    SphParams P = scene.P;
+    P.kernel = Kernel(kind, P.h);
+    FluidBuffers fb;
+    fb.allocate(MemSpace::Host, n, P.full_neighbors, scene.g.cells(), /*factors=*/true);
+    fb.x.upload(scene.x.data(), std::size_t(n));
+    fb.v.upload(v.data(), std::size_t(n));
+    fb.id.upload(std::vector<std::uint32_t>(std::size_t(n), 0u).data(), std::size_t(n));
+    fb.p.zero();
+    GridView g = scene.g;
+    fb.sort(ex, g, n, 11, /*dfsph=*/true);
+    g.start = fb.start.data();
+    stages::FluidView f = fb.view(n);
+    ASSERT_NE(f.nbr_gs, nullptr);
+    stages::WarmSums warm;
+    warm.dens_w = fb.kappa.data();
+    warm.dens_kw = fb.ksum.data();
+    fb.list_and_density(ex, P, f, g, stages::Walls(), /*with_alpha=*/true, warm);
+    f = fb.view(n);
+    stages::FluidView fresh = f;
+    fresh.nbr_gs = nullptr;
+    int listed = 0;
+    for (int i = 0; i < n; ++i) {
+      listed += fb.nbr_n.data()[i] > 0;
+      const Vec3 xi = f.x[i], vi = f.v[i];
+      auto term = [&](const auto& j, const auto&, const auto& r2, const auto&, const auto& gw) {
+        using stages::at;
+        return stages::both(dot(vi - at(f.v, j), gw), stages::both(gw, r2));
+      };
+      const auto a = stages::sum_fluid_pairs<false, stages::Both<Real, stages::Both<Vec3, Real>>>(
+          f, g, P.kernel, i, xi, P.h2, term);
+      const auto b = stages::sum_fluid_pairs<false, stages::Both<Real, stages::Both<Vec3, Real>>>(
+          fresh, g, P.kernel, i, xi, P.h2, term);
+      ASSERT_EQ(a.a, b.a) << "kernel " << kind << ", particle " << i;
+      ASSERT_EQ(a.b.a.x, b.b.a.x) << "kernel " << kind << ", particle " << i;
+      ASSERT_EQ(a.b.a.y, b.b.a.y) << "kernel " << kind << ", particle " << i;
+      ASSERT_EQ(a.b.a.z, b.b.a.z) << "kernel " << kind << ", particle " << i;
+      ASSERT_EQ(a.b.b, b.b.b) << "kernel " << kind << ", particle " << i;
+    }
+    EXPECT_GT(listed, n / 2);
+  }
+}
 TEST(SphCells, OverflowingListsFallBackToTheGridInBothLayouts) { check_lists(8); }
 
 }  // namespace

@@ -44,7 +44,8 @@ int cmd_check(const std::string& path) {
   if (s.has_fluid()) {
     const FluidModel m = compile_fluid(s);
     const double cells = double(m.grid.nx) * double(m.grid.ny) * double(m.grid.nz);
-    fluid_b = fluid_bytes(m.capacity, double(m.boundary_x.size()), cells);
+    fluid_b =
+        fluid_bytes(m.capacity, double(m.boundary_x.size()), cells, m.solver == SolverKind::DFSPH);
     const bool rays = s.coupling.method == CouplingMethod::RayTraced;
     if (rays && (!s.bodies.empty() || s.coupling.tank_rays || !s.obstacles.empty())) {
       SceneSize z;

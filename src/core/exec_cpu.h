@@ -30,6 +30,15 @@ void parallel_for(CpuExec&, int n, F f) {
   for (int i = 0; i < n; ++i) f(i);
 }
 
+// f(begin, end) for consecutive blocks of `block` items, a block to a thread, taken as the
+// threads come free.
+template <class F>
+void parallel_blocks(CpuExec&, int n, int block, F f) {
+  const int blocks = n > 0 ? (n + block - 1) / block : 0;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int b = 0; b < blocks; ++b) f(b * block, b == blocks - 1 ? n : (b + 1) * block);
+}
+
 // max over i of f(i); init for n = 0.
 template <class T, class F>
 T reduce_max(CpuExec&, int n, T init, F f) {

@@ -96,17 +96,18 @@ double contact_bound(const SceneSize& z) {
   return std::min(z.capacity, 0.5 * z.wall_samples);
 }
 
-double fluid_bytes(double capacity, double wall_samples, double grid_cells) {
+double fluid_bytes(double capacity, double wall_samples, double grid_cells, bool dfsph) {
   // Per particle: x, v, a, tmp (4 x 12 B); rho, p, alpha, kappa, kappa_sum, two warm starts,
-  // tmp (8 x 4 B); nb, flags, nbr_n, id, keys, perm (6 x 4 B); the neighbour list, room for
-  // about twice the 33 lattice points within the support (the compiled count is 27 or 33 as
-  // the support rounds; the larger is taken), rounded down to a multiple of eight (64 x 4 B);
-  // the radix sort's scratch, grown by a quarter (10 B); the initial x0, v0 kept by the
-  // scene's model and by the solver's copy of it (2 x 24 B). Per wall sample: x (12 B), nine reals
-  // and two ints (44 B), x and psi in the two models (2 x 16 B). Per cell: the fluid's and the
-  // samples' cell starts (8 B).
-  return capacity * (4 * 12.0 + 8 * 4.0 + 6 * 4.0 + 64 * 4.0 + 10.0 + 2 * 24.0) +
-         wall_samples * (56.0 + 2 * 16.0) + grid_cells * 8.0 + kFixedBytes;
+  // tmp (8 x 4 B); nb, flags, nbr_n, nbr_at, id, keys, perm (7 x 4 B); the neighbour lists,
+  // packed in a pool an eighth longer than they are, 36 entries a particle (31.5 measured in
+  // the dam break and in a tank: fluid neighbours padded to eight, the tank's samples by the
+  // walls) of 4 B, and under DFSPH the pairs' kernel factors beside them (4 B more); the radix
+  // sort's scratch, grown by a quarter (10 B); the initial x0, v0 in the scene's model (24 B). Per
+  // wall sample: x (12 B), nine reals and two ints (44 B), x and psi in the scene's model
+  // (16 B). Per cell: the fluid's and the samples' cell starts (8 B).
+  const double lists = 36.0 * (dfsph ? 8.0 : 4.0);
+  return capacity * (4 * 12.0 + 8 * 4.0 + 7 * 4.0 + lists + 10.0 + 24.0) +
+         wall_samples * (56.0 + 16.0) + grid_cells * 8.0 + kFixedBytes;
 }
 
 double coupling_bytes(double capacity, double contacts, bool solids) {
@@ -168,7 +169,8 @@ SceneSize scene_size(const SceneSpec& s) {
       z.grid_cells *= std::ceil((extent + 2.0 * pad) / h);
     }
     z.wall_samples = all - inner;
-    z.fluid_bytes = fluid_bytes(z.capacity, z.wall_samples, z.grid_cells);
+    z.fluid_bytes = fluid_bytes(z.capacity, z.wall_samples, z.grid_cells,
+                                s.simulation.solver == SolverKind::DFSPH);
     // The ray coupling runs with bodies, the tank's faces in the rays, or obstacles.
     const bool rays = s.coupling.method == CouplingMethod::RayTraced;
     if (rays && (!s.bodies.empty() || s.coupling.tank_rays || !s.obstacles.empty()))

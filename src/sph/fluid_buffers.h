@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
 
 #include "sph/stages.h"
 #include "sphfem/core/memory.h"
@@ -33,14 +34,24 @@ struct FluidBuffers {
   Buffer<int> nb, flags;
   Buffer<std::uint32_t> nbr;  // fluid neighbour lists of the step (FluidView::nbr)
   Buffer<int> nbr_n;
+  Buffer<std::uint32_t> nbr_at;  // the host's: where each list begins (FluidView::nbr_at)
+  Buffer<Real> nbr_gs;           // the host's, DFSPH: the pairs' kernel factors (FluidView::nbr_gs)
   int nbr_cap = 0;
   int cap = 0;                       // particles there is room for
   bool nbr_interleaved = false;      // the layout of nbr (FluidView::nbr_si, view())
+  bool keep_factors = false;         // nbr_gs is kept (allocate)
   Buffer<std::uint32_t> keys, perm;  // the sort's keys and order; keys: id's gather target
   Buffer<std::uint32_t> start;       // cell starts of the fluid's grid
 
-  // Room for cap particles on a grid of `cells` cells; the warm starts begin at 0.
-  void allocate(MemSpace s, int capacity, int full_neighbors, long long cells) {
+  // The host's first pool: entries a particle, too few for a full support's list, so that it
+  // grows to what the lists take (list_and_density).
+  static constexpr int kFirstListRoom = 8;
+
+  // Room for cap particles on a grid of `cells` cells; the warm starts begin at 0. factors:
+  // the host also keeps its pairs' kernel factors (DFSPH, whose passes read them a dozen times
+  // a step).
+  void allocate(MemSpace s, int capacity, int full_neighbors, long long cells,
+                bool factors = false) {
     cap = capacity;
     // One Vec3 more than the particles: the host's pair lanes read a fourth Real past x_j
     // (lanes::at). They swap with each other, so all four have it.
@@ -54,15 +65,23 @@ struct FluidBuffers {
     warm_dens.zero();
     nb = Buffer<int>(s, cap);
     flags = Buffer<int>(s, cap);
-    // Room for about twice a full support's neighbours; a particle compressed beyond that scans
-    // the grid instead (stages::for_fluid_neighbors). A multiple of eight: the host pads each
-    // list to whole groups of eight (stages::listed_end).
+    // Lists of up to about twice a full support's neighbours; a particle compressed beyond that
+    // scans the grid instead (stages::for_fluid_neighbors). A multiple of eight: the host pads
+    // each list to whole groups of eight (stages::listed_end).
     nbr_cap = std::max(32, (2 * full_neighbors) & ~7);
-    nbr = Buffer<std::uint32_t>(s, std::size_t(cap) * std::size_t(nbr_cap));
     // A device reads the lists interleaved, entry k of particle i at k * cap + i, so the
-    // threads of a warp read consecutive words; the host keeps each list contiguous (one or
-    // two cache lines a particle).
+    // threads of a warp read consecutive words, and keeps room for nbr_cap a particle. The host
+    // packs each list after the one before (stages::density_packed), in a pool as large as
+    // they are, which grows as they do (list_and_density): a list takes its length, not
+    // nbr_cap, which pays for the kernel factors beside it.
     nbr_interleaved = s == MemSpace::Device;
+    if (nbr_interleaved) {
+      nbr = Buffer<std::uint32_t>(s, std::size_t(cap) * std::size_t(nbr_cap));
+    } else {
+      nbr_at = Buffer<std::uint32_t>(s, cap);
+      keep_factors = factors;
+      grow_lists(std::size_t(cap) * kFirstListRoom);
+    }
     nbr_n = Buffer<int>(s, cap);
     for (Buffer<std::uint32_t>* b : {&id, &keys, &perm}) *b = Buffer<std::uint32_t>(s, cap);
     start = Buffer<std::uint32_t>(s, std::size_t(cells) + 1);
@@ -93,6 +112,40 @@ struct FluidBuffers {
     }
   }
 
+  // The host's pool for `entries` list entries (and as many factors), what it held lost.
+  void grow_lists(std::size_t entries) {
+    if (entries > std::size_t(0xffffffffu))
+      throw std::length_error("fluid: the neighbour lists would take more than 2^32 entries");
+    nbr = Buffer<std::uint32_t>(MemSpace::Host, entries);
+    if (keep_factors) nbr_gs = Buffer<Real>(MemSpace::Host, entries);
+  }
+
+  // stages::density over the view f of view(), its lists stored: on the host packed, the pool
+  // grown to an eighth beyond what they took, scaled to the capacity, and the pass run again
+  // where they did not fit (the first step, and steps whose lists outgrow the slack; the sums
+  // are the same).
+  template <class Exec>
+  void list_and_density(Exec& ex, const SphParams& P, stages::FluidView f, const GridView& g,
+                        const stages::Walls& w, bool with_alpha,
+                        const stages::WarmSums& warm = stages::WarmSums()) {
+    if constexpr (Exec::kSpace == MemSpace::Host) {
+      if (f.nbr_at) {
+        for (;;) {
+          const std::size_t need =
+              stages::density_packed(ex, P, f, g, w, with_alpha, nbr.size(), warm);
+          if (need <= nbr.size()) return;
+          // As long as the lists are now a particle, for all the particles there is room for
+          // (emitters add them), and an eighth more.
+          const double each = double(need) / double(f.n);
+          grow_lists(std::max(need + need / 8, std::size_t(1.125 * each * double(cap))));
+          f.nbr = nbr.data();
+          f.nbr_gs = keep_factors ? nbr_gs.data() : nullptr;
+        }
+      }
+    }
+    stages::density(ex, P, f, g, w, with_alpha, warm);
+  }
+
   // The first n particles as the stages see them.
   stages::FluidView view(int n) {
     stages::FluidView f;
@@ -113,6 +166,8 @@ struct FluidBuffers {
     f.id = id.data();
     f.nbr = nbr.data();
     f.nbr_n = nbr_n.data();
+    f.nbr_at = nbr_interleaved ? nullptr : nbr_at.data();
+    f.nbr_gs = keep_factors ? nbr_gs.data() : nullptr;
     f.nbr_cap = nbr_cap;
     f.nbr_si = nbr_interleaved ? 1 : std::size_t(nbr_cap);
     f.nbr_sk = nbr_interleaved ? std::size_t(cap) : 1;

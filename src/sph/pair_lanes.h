@@ -86,8 +86,9 @@ SPHFEM_LANE V8 at(const Vec3* a, const J8& j) {
 // few tank samples), asked for a few particles before a pass reads (or density() writes) it:
 // DFSPH's sweeps waited on the lists at two threads, which the hardware's prefetchers do not
 // fetch ahead (bench/results/README.md, "Lists fetched ahead").
-template <bool Write = false>
-SPHFEM_LANE void prefetch_list(const std::uint32_t* list) {
+template <bool Write = false, class E>
+SPHFEM_LANE void prefetch_list(const E* list) {
+  static_assert(sizeof(E) == 4, "a list's entries are four bytes");
   for (int l = 0; l < 3; ++l) __builtin_prefetch(list + 16 * l, Write ? 1 : 0);
 }
 
@@ -119,10 +120,11 @@ struct Of<Vec3> {
 
 // The sum over list[0..n) of term(j, rij, r2, W, grad W) with rij = xi - x_j (W only when
 // WithW, else 0), kWidth pairs at a time; the list is padded to whole groups with i itself
-// (stages::listed_end), whose lanes' terms are dropped.
+// (stages::listed_end), whose lanes' terms are dropped. factors: where to store each pair's
+// gradient factor (the padding's too, 0), or nullptr.
 template <bool WithW, class T, class Kern, class Term>
 SPHFEM_LANE T sum_pairs(const Kern& kernel, const std::uint32_t* list, int n, const Vec3* x,
-                        const Vec3& xi, Term& term) {
+                        const Vec3& xi, Term& term, Real* factors = nullptr) {
   const Kern K = kernel;  // a local copy: no store in the loop can change it
   const I8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
   typename Of<T>::type acc{};
@@ -134,8 +136,31 @@ SPHFEM_LANE T sum_pairs(const Kern& kernel, const std::uint32_t* list, int n, co
     const R8 r2 = norm2(r);
     const R8 rr = sqrt(r2);
     const R8 w = WithW ? K.W_at(rr) : R8{};
-    const V8 gw = r * K.gscale_at(rr);
+    const R8 gs = K.gscale_at(rr);
+    if (factors) __builtin_memcpy(factors + k0, &gs, sizeof gs);
+    const V8 gw = r * gs;
     const auto t = term(j, r, r2, w, gw);
+    acc = acc + (m >= kWidth ? t : select(valid, t, decltype(t){}));
+  }
+  return total(acc);
+}
+
+// The same without W, each pair's gradient factor read from where sum_pairs stored it for the
+// same positions: the bits of grad W are those the kernel gives, and the pass no longer waits
+// on a square root, a division and the kernel's polynomial for every group of eight.
+template <class T, class Term>
+SPHFEM_LANE T sum_pairs_stored(const std::uint32_t* list, const Real* factors, int n, const Vec3* x,
+                               const Vec3& xi, Term& term) {
+  const I8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
+  typename Of<T>::type acc{};
+  for (int k0 = 0; k0 < n; k0 += kWidth) {
+    const int m = n - k0;
+    const I8 valid = lane < m;
+    const J8 j{list + k0};
+    const V8 r = xi - at(x, j);
+    R8 gs;
+    __builtin_memcpy(&gs, factors + k0, sizeof gs);
+    const auto t = term(j, r, norm2(r), R8{}, r * gs);
     acc = acc + (m >= kWidth ? t : select(valid, t, decltype(t){}));
   }
   return total(acc);

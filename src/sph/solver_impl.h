@@ -26,10 +26,11 @@ using stages::Walls;
 template <class Exec>
 class SolverT final : public FluidSolver {
  public:
-  explicit SolverT(const FluidModel& m) : model_(m), P_(m.params) {
+  explicit SolverT(const FluidModel& m) : model_(settings(m)), P_(m.params) {
     const MemSpace s = Exec::kSpace;
     cap_ = std::max<int>(m.capacity, int(m.x0.size()));
-    fluid_.allocate(s, cap_, m.params.full_neighbors, m.grid.cells());
+    fluid_.allocate(s, cap_, m.params.full_neighbors, m.grid.cells(),
+                    m.solver == SolverKind::DFSPH);
 
     n_ = int(m.x0.size());
     fluid_.x.upload(m.x0.data(), n_);
@@ -39,7 +40,7 @@ class SolverT final : public FluidSolver {
     fluid_.id.upload(ids.data(), n_);
     next_id_ = std::uint32_t(n_);
 
-    upload_tank();
+    upload_tank(m);
     // The space beyond a surface filled like the tank's walls (sph/surface_density.h).
     const double layer = double(P_.spacing) / double(P_.h);
     const double lattice_mass =
@@ -128,7 +129,7 @@ class SolverT final : public FluidSolver {
       warm.dens_w = fluid_.kappa.data();
       warm.dens_kw = fluid_.ksum.data();
     }
-    stages::density(ex_, P_, f, g, w, dfsph, warm);
+    fluid_.list_and_density(ex_, P_, f, g, w, dfsph, warm);
     if (dfsph) {
       active_walls_ = stages::wall_density(ex_, P_, f, g, w.fixed);
       if (w.moving.n) active_walls_ += stages::wall_density(ex_, P_, f, g, w.moving);
@@ -248,6 +249,7 @@ class SolverT final : public FluidSolver {
     f.p = fluid_.tmpr.data();
     f.warm_div = f.warm_dens = nullptr;
     f.gwall = nullptr;
+    f.nbr_gs = nullptr;
     FluidArrays sorted = arrays();
     sorted.x = fluid_.tmp3.data();
     sorted.v = fluid_.a.data();
@@ -256,7 +258,7 @@ class SolverT final : public FluidSolver {
                   surfaces && moving_.count() ? surfaces->moving_boundary(sorted) : MovingSurface(),
                   key_bits());
     prox_ = surfaces ? surfaces->proximity(sorted) : SurfaceProximity();
-    stages::density(ex_, P_, f, g, walls(), /*with_alpha=*/false);
+    fluid_.list_and_density(ex_, P_, f, g, walls(), /*with_alpha=*/false);
     prox_ = SurfaceProximity();
     exec_sync(ex_);
     std::vector<std::uint32_t> perm(n);
@@ -373,7 +375,7 @@ class SolverT final : public FluidSolver {
 
   // The tank's samples, sorted into their grid once (upload_tank).
   BoundaryView tank() {
-    BoundaryView b = tank_.view(int(model_.boundary_x.size()));
+    BoundaryView b = tank_.view(tank_n_);
     b.quiet_lo = quiet_lo_;
     b.quiet_hi = quiet_hi_;
     return b;
@@ -381,21 +383,33 @@ class SolverT final : public FluidSolver {
 
   int key_bits() const { return cell_key_bits(model_.grid.cells()); }
 
-  void upload_tank() {
+  // The model less its arrays of particles and samples, which the buffers hold from here on
+  // (not kept twice: 61 B a particle in the dam break).
+  static FluidModel settings(const FluidModel& m) {
+    FluidModel k = m;
+    std::vector<Vec3>().swap(k.x0);
+    std::vector<Vec3>().swap(k.v0);
+    std::vector<Vec3>().swap(k.boundary_x);
+    std::vector<Real>().swap(k.boundary_psi);
+    return k;
+  }
+
+  void upload_tank(const FluidModel& m) {
     const MemSpace s = Exec::kSpace;
-    const int nb = int(model_.boundary_x.size());
+    const int nb = int(m.boundary_x.size());
+    tank_n_ = nb;
     tank_.resize(nb, grid(nullptr));
     // The tank's samples lie beyond the domain's faces: the particles away from them skip
     // the tank's scan (stages::in_quiet).
     BoundaryView quiet;
-    stages::quiet_box(model_.boundary_x.data(), nb, P_.clamp_lo, P_.clamp_hi, P_.h, quiet);
+    stages::quiet_box(m.boundary_x.data(), nb, P_.clamp_lo, P_.clamp_hi, P_.h, quiet);
     quiet_lo_ = quiet.quiet_lo;
     quiet_hi_ = quiet.quiet_hi;
     Buffer<Vec3> x(s, std::max(nb, 1));
     Buffer<Real> psi(s, std::max(nb, 1));
     Buffer<std::uint32_t> keys(s, std::max(nb, 1)), perm(s, std::max(nb, 1));
-    x.upload(model_.boundary_x.data(), nb);
-    psi.upload(model_.boundary_psi.data(), nb);
+    x.upload(m.boundary_x.data(), nb);
+    psi.upload(m.boundary_psi.data(), nb);
     const GridView g = tank_.grid();
     stages::cell_keys(ex_, g, x.data(), keys.data(), perm.data(), nb);
     sort_pairs(ex_, keys.data(), perm.data(), nb, key_bits());
@@ -531,6 +545,7 @@ class SolverT final : public FluidSolver {
   long steps_ = 0;
   FluidBuffers fluid_;          // state and scratch, see sph/fluid_buffers.h
   SampleSet<Exec> tank_;        // the tank's wall samples (upload_tank)
+  int tank_n_ = 0;              // how many
   Vec3 quiet_lo_, quiet_hi_;    // BoundaryView::quiet_lo of the tank
   FluidView reached_;           // FluidView::reach_lo of this step (sort), until drift
   MovingSamples<Exec> moving_;  // boundary-particle coupling: samples on a moving surface

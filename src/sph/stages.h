@@ -11,9 +11,12 @@
 // missing beyond it (near-surface density, sph/surface_density.h).
 #pragma once
 
+#include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
+#include <vector>
 
 #include "sph/pair_lanes.h"
 #include "sphfem/core/memory.h"
@@ -50,6 +53,14 @@ struct FluidView {
   int* nbr_n = nullptr;
   int nbr_cap = 0;
   std::size_t nbr_si = 0, nbr_sk = 0;
+  // The host packs the lists one after another (FluidBuffers: a pool sized by their lengths,
+  // not nbr_cap a particle): particle i's begins at nbr[nbr_at[i]]; nullptr: at i * nbr_si.
+  std::uint32_t* nbr_at = nullptr;
+  // DFSPH on the host: beside each listed fluid neighbour, the kernel's gradient factor of the
+  // pair (Kernel::gscale, grad W_ij = rij * factor), stored by density() from the positions
+  // the step's later passes see too, which then read it instead of evaluating the kernel
+  // again; nullptr: not stored.
+  Real* nbr_gs = nullptr;
   // The positions again as three planes of planes_stride Reals (x, y, z), for the list build's
   // scan (collect_neighbors), with seven readable Reals after the z plane's n; nullptr: not
   // there.
@@ -60,6 +71,11 @@ struct FluidView {
   int reached = 0;
   Vec3 reach_lo, reach_hi;
 };
+
+// Where particle i's list begins in f.nbr (FluidView::nbr_at).
+SPHFEM_HD std::size_t list_start(const FluidView& f, int i) {
+  return f.nbr_at ? std::size_t(f.nbr_at[i]) : std::size_t(i) * f.nbr_si;
+}
 
 // f(j, rij, r2) for each fluid neighbour j of particle i (at xi = f.x[i]), from the list
 // density() stored or from the grid. The list holds the grid's neighbours in the grid's order
@@ -74,7 +90,7 @@ SPHFEM_HD void for_fluid_neighbors(const FluidView& f, const GridView& g, int i,
     for_neighbors(g, f.x, xi, h2, fn);
     return;
   }
-  const std::uint32_t* list = f.nbr + std::size_t(i) * f.nbr_si;
+  const std::uint32_t* list = f.nbr + list_start(f, i);
   for (int k = 0; k < n; ++k) {
     const std::uint32_t j = list[std::size_t(k) * f.nbr_sk];
     const Vec3 rij = xi - f.x[j];
@@ -148,14 +164,24 @@ constexpr int kListAhead = 4;
 // list, sums them one by one in the list's order.
 template <bool WithW, class T, class Term>
 SPHFEM_HD_INLINE T sum_fluid_pairs(const FluidView& f, const GridView& g, const Kernel& K, int i,
-                                   const Vec3& xi, Real h2, Term&& term) {
+                                   const Vec3& xi, Real h2, Term&& term,
+                                   bool store_factors = false) {
 #if SPHFEM_PAIR_LANES
   const int n = f.nbr ? f.nbr_n[i] : -1;
   if (n >= 0 && f.nbr_sk == 1) {
-    const std::uint32_t* list = f.nbr + std::size_t(i) * f.nbr_si;
-    if (i + kListAhead < f.n) lanes::prefetch_list(list + kListAhead * f.nbr_si);
-    if (K.kind == 0) return lanes::sum_pairs<WithW, T>(K.cubic, list, n, f.x, xi, term);
-    return lanes::sum_pairs<WithW, T>(K.wendland, list, n, f.x, xi, term);
+    const std::size_t at = list_start(f, i);
+    const std::uint32_t* list = f.nbr + at;
+    Real* gs = f.nbr_gs ? f.nbr_gs + at : nullptr;
+    if (i + kListAhead < f.n) {
+      const std::size_t ahead = list_start(f, i + kListAhead);
+      lanes::prefetch_list(f.nbr + ahead);
+      if (gs && !store_factors) lanes::prefetch_list(f.nbr_gs + ahead);
+    }
+    if (!WithW && gs && !store_factors)
+      return lanes::sum_pairs_stored<T>(list, gs, n, f.x, xi, term);
+    if (!store_factors) gs = nullptr;
+    if (K.kind == 0) return lanes::sum_pairs<WithW, T>(K.cubic, list, n, f.x, xi, term, gs);
+    return lanes::sum_pairs<WithW, T>(K.wendland, list, n, f.x, xi, term, gs);
   }
 #endif
   T sum{};
@@ -251,7 +277,7 @@ SPHFEM_HD void for_tank_samples(const FluidView& fl, int i, int flags, const Wal
                                 const Vec3& xi, Real h2, F&& f) {
   const int listed = flags >> kTankListed;
   if (listed > 0) {
-    const std::uint32_t* list = fl.nbr + std::size_t(i) * fl.nbr_si;
+    const std::uint32_t* list = fl.nbr + list_start(fl, i);
     const int first = listed_end(fl, fl.nbr_n[i]);
     for (int k = first; k < first + listed - 1; ++k) {
       const std::uint32_t j = list[std::size_t(k) * fl.nbr_sk];
@@ -432,93 +458,155 @@ struct WarmSums {
   Real* dens_kw = nullptr;
 };
 
+// density() of particle i.
+SPHFEM_HD_INLINE void density_at(const SphParams& P, const FluidView& f, const GridView& g,
+                                 const Walls& w, bool with_alpha, const WarmSums& warm, int i) {
+  const Vec3 xi = f.x[i];
+  Real sum = 0, grad2 = 0;
+  Vec3 gsum, gwall, gwall_v;
+  int walls = 0;
+  // The list first, in the grid's order (or into a scratch slot without a list); the last
+  // slot takes the overflow, which nbr_n = -1 then marks unused.
+  std::uint32_t scratch;
+  std::uint32_t* list = f.nbr ? f.nbr + list_start(f, i) : &scratch;
+  const std::size_t step = f.nbr ? f.nbr_sk : 0;
+  const int last = f.nbr ? f.nbr_cap - 1 : 0;
+#if SPHFEM_PAIR_LANES
+  if (f.nbr && step == 1 && i + kListAhead < f.n)
+    lanes::prefetch_list<true>(list + kListAhead * f.nbr_si);
+#endif
+  const int count =
+      collect_neighbors(g, f.x, xi, P.h2, list, step, last, 0, f.planes, f.planes_stride);
+  // The padding up to listed_end fits, as nbr_cap is a multiple of eight (FluidBuffers).
+  const bool kept = f.nbr && count <= last;
+  const int end = kept ? listed_end(f, count) : count;
+  if (f.nbr) f.nbr_n[i] = kept ? count : -1;
+  for (int k = count; k < end; ++k) list[k] = std::uint32_t(i);
+  if (with_alpha) {
+    const auto t = sum_fluid_pairs<true, Both<Both<Real, Both<Vec3, Real>>, Real>>(
+        f, g, P.kernel, i, xi, P.h2,
+        [&](const auto& j, const auto&, const auto&, const auto& wk, const auto& grad) {
+          const auto gw = grad * P.volume;
+          return both(both(wk, both(gw, norm2(gw))), wk * at(f.warm_dens, j));
+        },
+        /*store_factors=*/true);
+    const auto& s = t.a;
+    warm.dens_w[i] = s.a;
+    warm.dens_kw[i] = t.b;
+    sum = s.a;
+    gsum = s.b.a;
+    grad2 = s.b.b;
+  } else {
+    sum = sum_fluid_pairs<true, Real>(
+        f, g, P.kernel, i, xi, P.h2,
+        [&](const auto&, const auto&, const auto&, const auto& wk, const auto&) { return wk; });
+  }
+  Real rho = P.mass * sum;
+  // The tank's samples in reach, listed after the fluid's where the list has room.
+  const int near = in_quiet(w.fixed, xi) ? 0 : kNearTank;
+  int listed = 0;
+  if (kept && near && end <= last) {
+    const int filled = collect_neighbors(w.fixed.grid, w.fixed.x, xi, P.h2, list, step, last, end);
+    listed = filled <= last ? 1 + filled - end : 0;
+  }
+  int tank = 0;
+  for_wall_samples(f, i, (listed << kTankListed) | near, w, xi, P.h2,
+                   [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
+                     const Real rr = std::sqrt(r2);
+                     rho += b.psi[j] * P.kernel.W(rr);
+                     ++walls;
+                     tank += &b == &w.fixed ? 1 : 0;
+                     if (with_alpha) {
+                       const Vec3 gw = P.kernel.grad(r, rr);
+                       gwall += gw * (b.psi[j] / P.rho0);
+                       gwall_v += gw * P.volume;
+                     }
+                   });
+  NearSurface s;
+  if (near_surface(w.surface, i, s)) {
+    rho += P.rho0 * s.phi;
+    walls += int(Real(P.full_neighbors) * half_space_volume(s.q) + Real(0.5));
+    if (with_alpha) gwall -= s.n * s.slope;
+  }
+  f.rho[i] = rho;
+  f.nb[i] = count;
+  int flags = (tank > 0 ? kNearTank : 0) | (listed << kTankListed);
+  if (!with_alpha) {
+    const Real p = P.stiffness * (rho / P.rho0 - Real(1));
+    f.p[i] = p > Real(0) ? p : Real(0);
+  } else {
+    // Diagonal of the pressure system: kappa_i moves i by -dt (gsum + gwall) kappa_i and each
+    // fluid neighbour j by dt V grad W_ij kappa_i; the walls carry their own stiffness.
+    const Real s = norm2(gsum + gwall) + grad2;
+    f.alpha[i] = s > Real(1e-6) ? Real(1) / s : Real(0);
+    flags |= count + walls >= full_neighborhood(P) ? kFullSupport : 0;
+    f.gwall[i] = gwall_v;
+  }
+  f.flags[i] = flags;
+}
+
 template <class Exec>
 void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w,
              bool with_alpha, const WarmSums warm = WarmSums()) {
-  parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
-    const Vec3 xi = f.x[i];
-    Real sum = 0, grad2 = 0;
-    Vec3 gsum, gwall, gwall_v;
-    int walls = 0;
-    // The list first, in the grid's order (or into a scratch slot without a list); the last
-    // slot takes the overflow, which nbr_n = -1 then marks unused.
-    std::uint32_t scratch;
-    std::uint32_t* list = f.nbr ? f.nbr + std::size_t(i) * f.nbr_si : &scratch;
-    const std::size_t step = f.nbr ? f.nbr_sk : 0;
-    const int last = f.nbr ? f.nbr_cap - 1 : 0;
-#if SPHFEM_PAIR_LANES
-    if (f.nbr && step == 1 && i + kListAhead < f.n)
-      lanes::prefetch_list<true>(list + kListAhead * f.nbr_si);
-#endif
-    const int count =
-        collect_neighbors(g, f.x, xi, P.h2, list, step, last, 0, f.planes, f.planes_stride);
-    // The padding up to listed_end fits, as nbr_cap is a multiple of eight (FluidBuffers).
-    const bool kept = f.nbr && count <= last;
-    const int end = kept ? listed_end(f, count) : count;
-    if (f.nbr) f.nbr_n[i] = kept ? count : -1;
-    for (int k = count; k < end; ++k) list[k] = std::uint32_t(i);
-    if (with_alpha) {
-      const auto t = sum_fluid_pairs<true, Both<Both<Real, Both<Vec3, Real>>, Real>>(
-          f, g, P.kernel, i, xi, P.h2,
-          [&](const auto& j, const auto&, const auto&, const auto& wk, const auto& grad) {
-            const auto gw = grad * P.volume;
-            return both(both(wk, both(gw, norm2(gw))), wk * at(f.warm_dens, j));
-          });
-      const auto& s = t.a;
-      warm.dens_w[i] = s.a;
-      warm.dens_kw[i] = t.b;
-      sum = s.a;
-      gsum = s.b.a;
-      grad2 = s.b.b;
-    } else {
-      sum = sum_fluid_pairs<true, Real>(
-          f, g, P.kernel, i, xi, P.h2,
-          [&](const auto&, const auto&, const auto&, const auto& wk, const auto&) { return wk; });
+  parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) { density_at(P, f, g, w, with_alpha, warm, i); });
+}
+
+// Entries of particle i's list after density(): its fluid neighbours up to listed_end and the
+// tank's samples listed after them; 0 without a list.
+SPHFEM_HD int list_entries(const FluidView& f, int i) {
+  const int n = f.nbr_n[i];
+  if (n < 0) return 0;
+  const int tank = f.flags[i] >> kTankListed;
+  return listed_end(f, n) + (tank > 0 ? tank - 1 : 0);
+}
+
+// Particles a host thread lists at a time in density_packed.
+constexpr int kPackBlock = 64;
+
+// density() with the host's lists packed into a pool of `room` entries (FluidView::nbr_at):
+// a thread takes kPackBlock particles, lists and sums them in a slot of nbr_cap entries each
+// on its own (hot in its cache), then moves their lists, as long as their counts, to the
+// pool's next free entries. Where they go depends on which thread came first, what they hold
+// does not, so neither do the sums. Returns the entries all lists took: more than room, and
+// some lists were not kept (the caller grows the pool and runs it again).
+template <class Exec>
+std::size_t density_packed(Exec& ex, const SphParams P, FluidView f, const GridView g,
+                           const Walls w, bool with_alpha, std::size_t room,
+                           const WarmSums warm = WarmSums()) {
+  std::atomic<std::size_t> used{0};
+  parallel_blocks(ex, f.n, kPackBlock, [&](int b0, int b1) {
+    const std::size_t slot = std::size_t(f.nbr_cap);
+    thread_local std::vector<std::uint32_t> stage_nbr;
+    thread_local std::vector<Real> stage_gs;
+    stage_nbr.resize(slot * kPackBlock);
+    FluidView s = f;
+    s.n = b1;  // the lists read ahead stay in the block's slots
+    s.nbr = stage_nbr.data();
+    if (f.nbr_gs) {
+      stage_gs.resize(slot * kPackBlock);
+      s.nbr_gs = stage_gs.data();
     }
-    Real rho = P.mass * sum;
-    // The tank's samples in reach, listed after the fluid's where the list has room.
-    const int near = in_quiet(w.fixed, xi) ? 0 : kNearTank;
-    int listed = 0;
-    if (kept && near && end <= last) {
-      const int filled =
-          collect_neighbors(w.fixed.grid, w.fixed.x, xi, P.h2, list, step, last, end);
-      listed = filled <= last ? 1 + filled - end : 0;
+    for (int i = b0; i < b1; ++i) f.nbr_at[i] = std::uint32_t(std::size_t(i - b0) * slot);
+    std::size_t total = 0;
+    for (int i = b0; i < b1; ++i) {
+      density_at(P, s, g, w, with_alpha, warm, i);
+      total += std::size_t(list_entries(f, i));
     }
-    int tank = 0;
-    for_wall_samples(f, i, (listed << kTankListed) | near, w, xi, P.h2,
-                     [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
-                       const Real rr = std::sqrt(r2);
-                       rho += b.psi[j] * P.kernel.W(rr);
-                       ++walls;
-                       tank += &b == &w.fixed ? 1 : 0;
-                       if (with_alpha) {
-                         const Vec3 gw = P.kernel.grad(r, rr);
-                         gwall += gw * (b.psi[j] / P.rho0);
-                         gwall_v += gw * P.volume;
-                       }
-                     });
-    NearSurface s;
-    if (near_surface(w.surface, i, s)) {
-      rho += P.rho0 * s.phi;
-      walls += int(Real(P.full_neighbors) * half_space_volume(s.q) + Real(0.5));
-      if (with_alpha) gwall -= s.n * s.slope;
+    std::size_t at = used.fetch_add(total);
+    if (at + total > room) return;
+    for (int i = b0; i < b1; ++i) {
+      const std::size_t from = std::size_t(i - b0) * slot;
+      const int e = list_entries(f, i);
+      std::copy(s.nbr + from, s.nbr + from + e, f.nbr + at);
+      if (f.nbr_gs) {
+        const int fluid = f.nbr_n[i] < 0 ? 0 : listed_end(f, f.nbr_n[i]);
+        std::copy(s.nbr_gs + from, s.nbr_gs + from + fluid, f.nbr_gs + at);
+      }
+      f.nbr_at[i] = std::uint32_t(at);
+      at += std::size_t(e);
     }
-    f.rho[i] = rho;
-    f.nb[i] = count;
-    int flags = (tank > 0 ? kNearTank : 0) | (listed << kTankListed);
-    if (!with_alpha) {
-      const Real p = P.stiffness * (rho / P.rho0 - Real(1));
-      f.p[i] = p > Real(0) ? p : Real(0);
-    } else {
-      // Diagonal of the pressure system: kappa_i moves i by -dt (gsum + gwall) kappa_i and each
-      // fluid neighbour j by dt V grad W_ij kappa_i; the walls carry their own stiffness.
-      const Real s = norm2(gsum + gwall) + grad2;
-      f.alpha[i] = s > Real(1e-6) ? Real(1) / s : Real(0);
-      flags |= count + walls >= full_neighborhood(P) ? kFullSupport : 0;
-      f.gwall[i] = gwall_v;
-    }
-    f.flags[i] = flags;
   });
+  return used.load();
 }
 
 // No-slip viscous acceleration of a particle with velocity vi from wall sample j, rij = x_i -

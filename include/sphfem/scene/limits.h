@@ -34,8 +34,9 @@ struct SceneSize {
 double frame_count(double duration, double fps);
 
 // The bytes the fluid solver holds for `capacity` particles, the wall samples and the grid
-// (the buffers of src/sph/fluid_buffers.h and sample_set.h), and the FEM solver for a body.
-double fluid_bytes(double capacity, double wall_samples, double grid_cells);
+// (the buffers of src/sph/fluid_buffers.h and sample_set.h; dfsph: with the kernel factors),
+// and the FEM solver for a body.
+double fluid_bytes(double capacity, double wall_samples, double grid_cells, bool dfsph);
 // The ray coupling's buffers (couple/ray_coupling.h, couple/coupler.h) for `capacity`
 // particles and at most `contacts` contacts a step; `solids`: closed obstacles in the
 // near-surface density.

@@ -143,6 +143,8 @@ class FluidSolver {
 
   virtual const StepProfile& profile() const = 0;
   virtual void reset_profile() = 0;
+  // The model the solver was made from, less its arrays x0, v0, boundary_x and boundary_psi:
+  // the solver's buffers hold those (save() gives the particles).
   virtual const FluidModel& model() const = 0;
   // Emitter e (fluid.emitters[e]) emits within its start..end window only while enabled, as
   // a valve would; all are enabled at construction. A control input, not part of the saved
