@@ -94,9 +94,9 @@ ListScene list_scene() {
 }
 
 // density() stores each particle's fluid neighbours; for_fluid_neighbors and for_fluid_pairs
-// (with the kernel's values) must give them back in the grid's order, in either layout, and
-// they must be the brute-force neighbour set.
-void check_lists(int nbr_cap_override) {
+// (with the kernel's values) must give them back in the grid's order, in every layout (the
+// host's, packed or not, and a device's), and they must be the brute-force neighbour set.
+void check_lists(int nbr_cap_override, bool packed) {
   CpuExec ex;
   const ListScene scene = list_scene();
   const SphParams& P = scene.P;
@@ -106,7 +106,7 @@ void check_lists(int nbr_cap_override) {
   const int n = int(x.size());
   const int cap = n + 37;  // the interleaved stride is the capacity, not n
   FluidBuffers fb;
-  fb.allocate(MemSpace::Host, cap, P.full_neighbors, g.cells());
+  fb.allocate(MemSpace::Host, cap, P.full_neighbors, g.cells(), /*factors=*/packed);
   if (nbr_cap_override > 0) fb.nbr_cap = nbr_cap_override;
   fb.x.upload(x.data(), std::size_t(n));
   fb.v.zero();
@@ -120,41 +120,45 @@ void check_lists(int nbr_cap_override) {
   for (int j = 0; j < cap; ++j) q[std::size_t(j)] = Real(1) + Real(0.01) * Real(j % 97);
 
   stages::FluidView host = fb.view(n);
-  ASSERT_NE(host.nbr_at, nullptr);
+  ASSERT_EQ(host.nbr_at != nullptr, packed);
   ASSERT_EQ(host.nbr_sk, std::size_t(1));
   stages::Walls walls;
-  // The host packs the lists (its pool starts too small for them: the pass runs again).
+  // Packed, the pool starts too small for the lists: the pass runs again.
   fb.list_and_density(ex, P, host, g, walls, /*with_alpha=*/false);
   // Kept aside: the second run below writes the counts in the other layout.
   std::vector<std::uint32_t> host_list(fb.nbr.data(), fb.nbr.data() + fb.nbr.size());
-  std::vector<std::uint32_t> host_at(fb.nbr_at.data(), fb.nbr_at.data() + n);
+  std::vector<std::uint32_t> host_at(packed ? fb.nbr_at.data() : nullptr,
+                                     packed ? fb.nbr_at.data() + n : nullptr);
   std::vector<int> host_n(fb.nbr_n.data(), fb.nbr_n.data() + n);
   const std::vector<Real> host_rho(fb.rho.data(), fb.rho.data() + n);
-  // Packed: one list after another, none overlapping, the pool (once grown) no larger than an
-  // eighth beyond what they take, scaled from the particles to the capacity.
-  std::size_t packed = 0;
-  for (int i = 0; i < n; ++i) packed += std::size_t(stages::list_entries(host, i));
-  EXPECT_LE(double(fb.nbr.size()), std::max(1.125 * double(packed) * cap / n + 1.0,
-                                            double(cap) * FluidBuffers::kFirstListRoom));
-  std::vector<int> owner(fb.nbr.size(), -1);
-  for (int i = 0; i < n; ++i)
-    for (int k = 0; k < stages::list_entries(host, i); ++k) {
-      ASSERT_LT(host_at[std::size_t(i)] + std::size_t(k), owner.size());
-      ASSERT_EQ(owner[host_at[std::size_t(i)] + std::size_t(k)], -1) << "particle " << i;
-      owner[host_at[std::size_t(i)] + std::size_t(k)] = i;
-    }
+  if (packed) {
+    // One list after another, none overlapping, the pool (once grown) no larger than an
+    // eighth beyond what they take, scaled from the particles to the capacity.
+    std::size_t entries = 0;
+    for (int i = 0; i < n; ++i) entries += std::size_t(stages::list_entries(host, i));
+    EXPECT_LE(double(fb.nbr.size()), std::max(1.125 * double(entries) * cap / n + 1.0,
+                                              double(cap) * FluidBuffers::kFirstListRoom));
+    std::vector<int> owner(fb.nbr.size(), -1);
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < stages::list_entries(host, i); ++k) {
+        ASSERT_LT(host_at[std::size_t(i)] + std::size_t(k), owner.size());
+        ASSERT_EQ(owner[host_at[std::size_t(i)] + std::size_t(k)], -1) << "particle " << i;
+        owner[host_at[std::size_t(i)] + std::size_t(k)] = i;
+      }
+  }
 
   // A device's layout: entry k of particle i at k * cap + i, room for nbr_cap each.
   std::vector<std::uint32_t> dev_list(std::size_t(cap) * std::size_t(fb.nbr_cap), 0xffffffffu);
   stages::FluidView dev = host;
   dev.nbr = dev_list.data();
   dev.nbr_at = nullptr;
+  dev.nbr_gs = nullptr;
   dev.nbr_si = 1;
   dev.nbr_sk = std::size_t(cap);
   stages::density(ex, P, dev, g, walls, /*with_alpha=*/false);
 
   host.nbr = host_list.data();
-  host.nbr_at = host_at.data();
+  host.nbr_at = packed ? host_at.data() : nullptr;
   host.nbr_n = host_n.data();
   const Vec3* xs = fb.x.data();
   int overflowed = 0;
@@ -214,7 +218,8 @@ void check_lists(int nbr_cap_override) {
     } else {
       ASSERT_EQ(m, int(grid_order.size()));
       for (int k = 0; k < m; ++k) {
-        ASSERT_EQ(host_list[host_at[std::size_t(i)] + std::size_t(k)], grid_order[std::size_t(k)]);
+        ASSERT_EQ(host_list[stages::list_start(host, i) + std::size_t(k)],
+                  grid_order[std::size_t(k)]);
         ASSERT_EQ(dev_list[std::size_t(k) * std::size_t(cap) + std::size_t(i)],
                   grid_order[std::size_t(k)]);
       }
@@ -230,7 +235,10 @@ void check_lists(int nbr_cap_override) {
     EXPECT_LT(overflowed, n / 10);
 }
 
-TEST(SphCells, NeighbourListsInBothLayoutsEqualBruteForce) { check_lists(0); }
+TEST(SphCells, NeighbourListsInEveryLayoutEqualBruteForce) {
+  check_lists(0, /*packed=*/false);
+  check_lists(0, /*packed=*/true);
+}
 
 // DFSPH's passes read each pair's kernel factor where the density pass stored it: their sums
 // must be those of the kernel evaluated again, to the bit, for both kernels.
@@ -284,6 +292,9 @@ TEST(SphCells, StoredKernelFactorsGiveTheKernelsBits) {
     EXPECT_GT(listed, n / 2);
   }
 }
-TEST(SphCells, OverflowingListsFallBackToTheGridInBothLayouts) { check_lists(8); }
+TEST(SphCells, OverflowingListsFallBackToTheGridInEveryLayout) {
+  check_lists(8, /*packed=*/false);
+  check_lists(8, /*packed=*/true);
+}
 
 }  // namespace

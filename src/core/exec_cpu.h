@@ -31,12 +31,16 @@ void parallel_for(CpuExec&, int n, F f) {
 }
 
 // f(begin, end) for consecutive blocks of `block` items, a block to a thread, taken as the
-// threads come free.
-template <class F>
-void parallel_blocks(CpuExec&, int n, int block, F f) {
+// threads come free; then done() once on each thread, after its last block.
+template <class F, class G>
+void parallel_blocks(CpuExec&, int n, int block, F f, G done) {
   const int blocks = n > 0 ? (n + block - 1) / block : 0;
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int b = 0; b < blocks; ++b) f(b * block, b == blocks - 1 ? n : (b + 1) * block);
+#pragma omp parallel
+  {
+#pragma omp for schedule(dynamic, 1) nowait
+    for (int b = 0; b < blocks; ++b) f(b * block, b == blocks - 1 ? n : (b + 1) * block);
+    done();
+  }
 }
 
 // max over i of f(i); init for n = 0.

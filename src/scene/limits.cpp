@@ -98,14 +98,17 @@ double contact_bound(const SceneSize& z) {
 
 double fluid_bytes(double capacity, double wall_samples, double grid_cells, bool dfsph) {
   // Per particle: x, v, a, tmp (4 x 12 B); rho, p, alpha, kappa, kappa_sum, two warm starts,
-  // tmp (8 x 4 B); nb, flags, nbr_n, nbr_at, id, keys, perm (7 x 4 B); the neighbour lists,
-  // packed in a pool an eighth longer than they are, 36 entries a particle (31.5 measured in
-  // the dam break and in a tank: fluid neighbours padded to eight, the tank's samples by the
-  // walls) of 4 B, and under DFSPH the pairs' kernel factors beside them (4 B more); the radix
-  // sort's scratch, grown by a quarter (10 B); the initial x0, v0 in the scene's model (24 B). Per
-  // wall sample: x (12 B), nine reals and two ints (44 B), x and psi in the scene's model
-  // (16 B). Per cell: the fluid's and the samples' cell starts (8 B).
-  const double lists = 36.0 * (dfsph ? 8.0 : 4.0);
+  // tmp (8 x 4 B); nb, flags, nbr_n, nbr_at, id, keys, perm (7 x 4 B); the neighbour lists:
+  // under WCSPH room for about twice the 33 lattice points within the support (the compiled
+  // count is 27 or 33 as the support rounds; the larger is taken), rounded down to a multiple
+  // of eight (64 x 4 B); under DFSPH packed in a pool an eighth longer than they are, 36
+  // entries a particle (31.5 measured in the dam break and in a tank: fluid neighbours padded
+  // to eight, the tank's samples by the walls) of 4 B, with the pairs' kernel factors beside
+  // them (4 B more); the radix sort's scratch, grown by a quarter (10 B); the initial x0, v0
+  // in the scene's model (24 B). Per wall sample: x (12 B), nine reals and two ints (44 B), x
+  // and psi in the scene's model (16 B). Per cell: the fluid's and the samples' cell starts
+  // (8 B).
+  const double lists = dfsph ? 36.0 * 8.0 : 64.0 * 4.0;
   return capacity * (4 * 12.0 + 8 * 4.0 + 7 * 4.0 + lists + 10.0 + 24.0) +
          wall_samples * (56.0 + 16.0) + grid_cells * 8.0 + kFixedBytes;
 }

@@ -37,9 +37,9 @@ struct FluidBuffers {
   Buffer<std::uint32_t> nbr_at;  // the host's: where each list begins (FluidView::nbr_at)
   Buffer<Real> nbr_gs;           // the host's, DFSPH: the pairs' kernel factors (FluidView::nbr_gs)
   int nbr_cap = 0;
-  int cap = 0;                       // particles there is room for
-  bool nbr_interleaved = false;      // the layout of nbr (FluidView::nbr_si, view())
-  bool keep_factors = false;         // nbr_gs is kept (allocate)
+  int cap = 0;                   // particles there is room for
+  bool nbr_interleaved = false;  // the layout of nbr (FluidView::nbr_si, view())
+  bool packed = false;           // the host packs the lists, with their kernel factors (allocate)
   Buffer<std::uint32_t> keys, perm;  // the sort's keys and order; keys: id's gather target
   Buffer<std::uint32_t> start;       // cell starts of the fluid's grid
 
@@ -70,17 +70,19 @@ struct FluidBuffers {
     // each list to whole groups of eight (stages::listed_end).
     nbr_cap = std::max(32, (2 * full_neighbors) & ~7);
     // A device reads the lists interleaved, entry k of particle i at k * cap + i, so the
-    // threads of a warp read consecutive words, and keeps room for nbr_cap a particle. The host
-    // packs each list after the one before (stages::density_packed), in a pool as large as
-    // they are, which grows as they do (list_and_density): a list takes its length, not
-    // nbr_cap, which pays for the kernel factors beside it.
+    // threads of a warp read consecutive words; the host reads each contiguously. Both keep
+    // room for nbr_cap a particle, except where the host keeps the pairs' kernel factors
+    // (DFSPH): it then packs each list after the one before (stages::density_packed), in a
+    // pool as large as they are, which grows as they do (list_and_density), so that a list
+    // takes its length, not nbr_cap, which pays for the factors beside it. Without factors
+    // (WCSPH) the packing's copy would cost time for nothing.
     nbr_interleaved = s == MemSpace::Device;
-    if (nbr_interleaved) {
-      nbr = Buffer<std::uint32_t>(s, std::size_t(cap) * std::size_t(nbr_cap));
-    } else {
+    packed = !nbr_interleaved && factors;
+    if (packed) {
       nbr_at = Buffer<std::uint32_t>(s, cap);
-      keep_factors = factors;
       grow_lists(std::size_t(cap) * kFirstListRoom);
+    } else {
+      nbr = Buffer<std::uint32_t>(s, std::size_t(cap) * std::size_t(nbr_cap));
     }
     nbr_n = Buffer<int>(s, cap);
     for (Buffer<std::uint32_t>* b : {&id, &keys, &perm}) *b = Buffer<std::uint32_t>(s, cap);
@@ -117,7 +119,7 @@ struct FluidBuffers {
     if (entries > std::size_t(0xffffffffu))
       throw std::length_error("fluid: the neighbour lists would take more than 2^32 entries");
     nbr = Buffer<std::uint32_t>(MemSpace::Host, entries);
-    if (keep_factors) nbr_gs = Buffer<Real>(MemSpace::Host, entries);
+    nbr_gs = Buffer<Real>(MemSpace::Host, entries);
   }
 
   // stages::density over the view f of view(), its lists stored: on the host packed, the pool
@@ -129,7 +131,7 @@ struct FluidBuffers {
                         const stages::Walls& w, bool with_alpha,
                         const stages::WarmSums& warm = stages::WarmSums()) {
     if constexpr (Exec::kSpace == MemSpace::Host) {
-      if (f.nbr_at) {
+      if (packed) {
         for (;;) {
           const std::size_t need =
               stages::density_packed(ex, P, f, g, w, with_alpha, nbr.size(), warm);
@@ -139,7 +141,7 @@ struct FluidBuffers {
           const double each = double(need) / double(f.n);
           grow_lists(std::max(need + need / 8, std::size_t(1.125 * each * double(cap))));
           f.nbr = nbr.data();
-          f.nbr_gs = keep_factors ? nbr_gs.data() : nullptr;
+          if (f.nbr_gs) f.nbr_gs = nbr_gs.data();
         }
       }
     }
@@ -166,8 +168,8 @@ struct FluidBuffers {
     f.id = id.data();
     f.nbr = nbr.data();
     f.nbr_n = nbr_n.data();
-    f.nbr_at = nbr_interleaved ? nullptr : nbr_at.data();
-    f.nbr_gs = keep_factors ? nbr_gs.data() : nullptr;
+    f.nbr_at = packed ? nbr_at.data() : nullptr;
+    f.nbr_gs = packed ? nbr_gs.data() : nullptr;
     f.nbr_cap = nbr_cap;
     f.nbr_si = nbr_interleaved ? 1 : std::size_t(nbr_cap);
     f.nbr_sk = nbr_interleaved ? std::size_t(cap) : 1;

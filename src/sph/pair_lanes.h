@@ -17,6 +17,15 @@
 #define SPHFEM_PAIR_LANES 0
 #endif
 
+// Written after a pair term's parameters: the term inlined into the host's pair loops. Both
+// loops (lanes::sum_pairs, sum_pairs_stored) call it, and g++ then left some terms as calls,
+// their vectors passed through memory (WCSPH's accelerations 10 % slower).
+#if SPHFEM_PAIR_LANES
+#define SPHFEM_TERM __attribute__((always_inline))
+#else
+#define SPHFEM_TERM
+#endif
+
 #if SPHFEM_PAIR_LANES
 namespace sphfem::lanes {
 
@@ -120,11 +129,11 @@ struct Of<Vec3> {
 
 // The sum over list[0..n) of term(j, rij, r2, W, grad W) with rij = xi - x_j (W only when
 // WithW, else 0), kWidth pairs at a time; the list is padded to whole groups with i itself
-// (stages::listed_end), whose lanes' terms are dropped. factors: where to store each pair's
-// gradient factor (the padding's too, 0), or nullptr.
-template <bool WithW, class T, class Kern, class Term>
+// (stages::listed_end), whose lanes' terms are dropped. Store: factors is where to store
+// each pair's gradient factor (the padding's too, 0), or nullptr.
+template <bool WithW, class T, bool Store, class Kern, class Term>
 SPHFEM_LANE T sum_pairs(const Kern& kernel, const std::uint32_t* list, int n, const Vec3* x,
-                        const Vec3& xi, Term& term, Real* factors = nullptr) {
+                        const Vec3& xi, Term& term, Real* factors) {
   const Kern K = kernel;  // a local copy: no store in the loop can change it
   const I8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
   typename Of<T>::type acc{};
@@ -136,10 +145,13 @@ SPHFEM_LANE T sum_pairs(const Kern& kernel, const std::uint32_t* list, int n, co
     const R8 r2 = norm2(r);
     const R8 rr = sqrt(r2);
     const R8 w = WithW ? K.W_at(rr) : R8{};
-    const R8 gs = K.gscale_at(rr);
-    if (factors) __builtin_memcpy(factors + k0, &gs, sizeof gs);
-    const V8 gw = r * gs;
-    const auto t = term(j, r, r2, w, gw);
+    // Written twice, so that g++ computes the factor only where a term or the store takes it
+    // (the WCSPH density's terms do not, and store nothing).
+    if (Store && factors) {
+      const R8 gs = K.gscale_at(rr);
+      __builtin_memcpy(factors + k0, &gs, sizeof gs);
+    }
+    const auto t = term(j, r, r2, w, r * K.gscale_at(rr));
     acc = acc + (m >= kWidth ? t : select(valid, t, decltype(t){}));
   }
   return total(acc);

@@ -161,11 +161,12 @@ constexpr int kListAhead = 4;
 // arrays through at().
 // The host sums a listed particle's pairs in vector lanes (lanes::sum_pairs: the term is
 // generic and is evaluated there on eight pairs at once); a device, or a particle without a
-// list, sums them one by one in the list's order.
-template <bool WithW, class T, class Term>
+// list, sums them one by one in the list's order. Where the host keeps the pairs' kernel
+// factors (FluidView::nbr_gs), StoreFactors stores them (the density pass), and a sum without
+// W reads them.
+template <bool WithW, class T, bool StoreFactors = false, class Term>
 SPHFEM_HD_INLINE T sum_fluid_pairs(const FluidView& f, const GridView& g, const Kernel& K, int i,
-                                   const Vec3& xi, Real h2, Term&& term,
-                                   bool store_factors = false) {
+                                   const Vec3& xi, Real h2, Term&& term) {
 #if SPHFEM_PAIR_LANES
   const int n = f.nbr ? f.nbr_n[i] : -1;
   if (n >= 0 && f.nbr_sk == 1) {
@@ -175,13 +176,13 @@ SPHFEM_HD_INLINE T sum_fluid_pairs(const FluidView& f, const GridView& g, const 
     if (i + kListAhead < f.n) {
       const std::size_t ahead = list_start(f, i + kListAhead);
       lanes::prefetch_list(f.nbr + ahead);
-      if (gs && !store_factors) lanes::prefetch_list(f.nbr_gs + ahead);
+      if (gs && !StoreFactors) lanes::prefetch_list(f.nbr_gs + ahead);
     }
-    if (!WithW && gs && !store_factors)
+    if (!WithW && gs && !StoreFactors)
       return lanes::sum_pairs_stored<T>(list, gs, n, f.x, xi, term);
-    if (!store_factors) gs = nullptr;
-    if (K.kind == 0) return lanes::sum_pairs<WithW, T>(K.cubic, list, n, f.x, xi, term, gs);
-    return lanes::sum_pairs<WithW, T>(K.wendland, list, n, f.x, xi, term, gs);
+    if (K.kind == 0)
+      return lanes::sum_pairs<WithW, T, StoreFactors>(K.cubic, list, n, f.x, xi, term, gs);
+    return lanes::sum_pairs<WithW, T, StoreFactors>(K.wendland, list, n, f.x, xi, term, gs);
   }
 #endif
   T sum{};
@@ -483,13 +484,12 @@ SPHFEM_HD_INLINE void density_at(const SphParams& P, const FluidView& f, const G
   if (f.nbr) f.nbr_n[i] = kept ? count : -1;
   for (int k = count; k < end; ++k) list[k] = std::uint32_t(i);
   if (with_alpha) {
-    const auto t = sum_fluid_pairs<true, Both<Both<Real, Both<Vec3, Real>>, Real>>(
+    const auto t = sum_fluid_pairs<true, Both<Both<Real, Both<Vec3, Real>>, Real>, true>(
         f, g, P.kernel, i, xi, P.h2,
-        [&](const auto& j, const auto&, const auto&, const auto& wk, const auto& grad) {
+        [&](const auto& j, const auto&, const auto&, const auto& wk, const auto& grad) SPHFEM_TERM {
           const auto gw = grad * P.volume;
           return both(both(wk, both(gw, norm2(gw))), wk * at(f.warm_dens, j));
-        },
-        /*store_factors=*/true);
+        });
     const auto& s = t.a;
     warm.dens_w[i] = s.a;
     warm.dens_kw[i] = t.b;
@@ -497,9 +497,9 @@ SPHFEM_HD_INLINE void density_at(const SphParams& P, const FluidView& f, const G
     gsum = s.b.a;
     grad2 = s.b.b;
   } else {
-    sum = sum_fluid_pairs<true, Real>(
-        f, g, P.kernel, i, xi, P.h2,
-        [&](const auto&, const auto&, const auto&, const auto& wk, const auto&) { return wk; });
+    sum = sum_fluid_pairs<true, Real>(f, g, P.kernel, i, xi, P.h2,
+                                      [&](const auto&, const auto&, const auto&, const auto& wk,
+                                          const auto&) SPHFEM_TERM { return wk; });
   }
   Real rho = P.mass * sum;
   // The tank's samples in reach, listed after the fluid's where the list has room.
@@ -563,49 +563,71 @@ SPHFEM_HD int list_entries(const FluidView& f, int i) {
 // Particles a host thread lists at a time in density_packed.
 constexpr int kPackBlock = 64;
 
+// A host thread's blocks of lists in density_packed: two, one being listed while the one
+// before waits for its place in the pool to be fetched.
+struct PackStage {
+  std::vector<std::uint32_t> nbr[2];
+  std::vector<Real> gs[2];
+  int next = 0;
+  std::size_t at = 0, size = 0;  // where the waiting block goes, its entries (0: none)
+  // Moves the waiting block to the pool.
+  void flush(const FluidView& f) {
+    const int w = next ^ 1;
+    std::copy(nbr[w].data(), nbr[w].data() + size, f.nbr + at);
+    if (f.nbr_gs) std::copy(gs[w].data(), gs[w].data() + size, f.nbr_gs + at);
+    size = 0;
+  }
+};
+
 // density() with the host's lists packed into a pool of `room` entries (FluidView::nbr_at):
-// a thread takes kPackBlock particles, lists and sums them in a slot of nbr_cap entries each
-// on its own (hot in its cache), then moves their lists, as long as their counts, to the
-// pool's next free entries. Where they go depends on which thread came first, what they hold
-// does not, so neither do the sums. Returns the entries all lists took: more than room, and
-// some lists were not kept (the caller grows the pool and runs it again).
+// a thread takes kPackBlock particles and lists and sums them one after another in a block of
+// its own (hot in its cache; each list has room for nbr_cap entries where it begins), takes
+// the block's place at the pool's next free entry and asks for those lines, and moves the
+// block there once it has listed the next one (a copy at once waited on every line). Where a
+// block goes depends on which thread came first, what a list holds does not, so neither do
+// the sums. Returns the entries all lists took: more than room, and some lists were not kept
+// (the caller grows the pool and runs it again).
 template <class Exec>
 std::size_t density_packed(Exec& ex, const SphParams P, FluidView f, const GridView g,
                            const Walls w, bool with_alpha, std::size_t room,
                            const WarmSums warm = WarmSums()) {
   std::atomic<std::size_t> used{0};
-  parallel_blocks(ex, f.n, kPackBlock, [&](int b0, int b1) {
-    const std::size_t slot = std::size_t(f.nbr_cap);
-    thread_local std::vector<std::uint32_t> stage_nbr;
-    thread_local std::vector<Real> stage_gs;
-    stage_nbr.resize(slot * kPackBlock);
-    FluidView s = f;
-    s.n = b1;  // the lists read ahead stay in the block's slots
-    s.nbr = stage_nbr.data();
-    if (f.nbr_gs) {
-      stage_gs.resize(slot * kPackBlock);
-      s.nbr_gs = stage_gs.data();
-    }
-    for (int i = b0; i < b1; ++i) f.nbr_at[i] = std::uint32_t(std::size_t(i - b0) * slot);
-    std::size_t total = 0;
-    for (int i = b0; i < b1; ++i) {
-      density_at(P, s, g, w, with_alpha, warm, i);
-      total += std::size_t(list_entries(f, i));
-    }
-    std::size_t at = used.fetch_add(total);
-    if (at + total > room) return;
-    for (int i = b0; i < b1; ++i) {
-      const std::size_t from = std::size_t(i - b0) * slot;
-      const int e = list_entries(f, i);
-      std::copy(s.nbr + from, s.nbr + from + e, f.nbr + at);
-      if (f.nbr_gs) {
-        const int fluid = f.nbr_n[i] < 0 ? 0 : listed_end(f, f.nbr_n[i]);
-        std::copy(s.nbr_gs + from, s.nbr_gs + from + fluid, f.nbr_gs + at);
-      }
-      f.nbr_at[i] = std::uint32_t(at);
-      at += std::size_t(e);
-    }
-  });
+  thread_local PackStage stage;
+  const std::size_t block = std::size_t(f.nbr_cap) * kPackBlock;
+  parallel_blocks(
+      ex, f.n, kPackBlock,
+      [&](int b0, int b1) {
+        PackStage& st = stage;
+        const int k = st.next;
+        st.nbr[k].resize(block);
+        FluidView s = f;
+        s.n = 0;  // nothing to read ahead: the block's lists are in the cache
+        s.nbr = st.nbr[k].data();
+        if (f.nbr_gs) {
+          st.gs[k].resize(block);
+          s.nbr_gs = st.gs[k].data();
+        }
+        std::size_t total = 0;
+        for (int i = b0; i < b1; ++i) {
+          f.nbr_at[i] = std::uint32_t(total);
+          density_at(P, s, g, w, with_alpha, warm, i);
+          total += std::size_t(list_entries(f, i));
+        }
+        if (st.size) st.flush(f);
+        const std::size_t at = used.fetch_add(total);
+        st.next = k ^ 1;
+        if (at + total > room) return;
+        for (int i = b0; i < b1; ++i) f.nbr_at[i] += std::uint32_t(at);
+        for (std::size_t e = at & ~std::size_t(15); e < at + total; e += 16) {
+          __builtin_prefetch(f.nbr + e, 1);
+          if (f.nbr_gs) __builtin_prefetch(f.nbr_gs + e, 1);
+        }
+        st.at = at;
+        st.size = total;
+      },
+      [&] {
+        if (stage.size) stage.flush(f);
+      });
   return used.load();
 }
 
@@ -694,7 +716,7 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
     // pair loop kept g++ from vectorising it.
     auto pairs = [&, rho, p, v](auto press, auto av, auto xsph) {
       auto pair = [&](const auto& j, const auto& r, const auto& r2, const auto& wk,
-                      const auto& gw) {
+                      const auto& gw) SPHFEM_TERM {
         using R = std::decay_t<decltype(r2)>;
         const R rhoj = at(rho, j);
         const auto vij = vi - at(v, j);
@@ -719,9 +741,10 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
         const Real ki = warm_k[i];
         const auto t = sum_fluid_pairs<W, Both<Vec3, Vec3>>(
             f, g, P.kernel, i, xi, P.h2,
-            [&](const auto& j, const auto& r, const auto& r2, const auto& wk, const auto& gw) {
-              return both(pair(j, r, r2, wk, gw), dfsph_pair_term(P, warm_k, ki, j, gw));
-            });
+            [&](const auto& j, const auto& r, const auto& r2, const auto& wk, const auto& gw)
+                SPHFEM_TERM {
+                  return both(pair(j, r, r2, wk, gw), dfsph_pair_term(P, warm_k, ki, j, gw));
+                });
         warm_dv[i] = t.b;
         return t.a;
       }
@@ -893,9 +916,8 @@ double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g, 
     const Vec3 xi = f.x[i], vi = f.v[i];
     Real d = sum_fluid_pairs<false, Real>(
         f, g, P.kernel, i, xi, P.h2,
-        [&](const auto& j, const auto&, const auto&, const auto&, const auto& gw) {
-          return P.volume * dot(vi - at(f.v, j), gw);
-        });
+        [&](const auto& j, const auto&, const auto&, const auto&, const auto& gw)
+            SPHFEM_TERM { return P.volume * dot(vi - at(f.v, j), gw); });
     for_wall_samples(
         f, i, w, xi, P.h2, [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
           d += (b.psi[j] / P.rho0) * dot(relative_to(b, j, vi), P.kernel.grad(r, std::sqrt(r2)));
@@ -1094,9 +1116,8 @@ void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, con
                   ? fluid_dv[i]
                   : sum_fluid_pairs<false, Vec3>(
                         f, g, P.kernel, i, xi, P.h2,
-                        [&](const auto& j, const auto&, const auto&, const auto&, const auto& gw) {
-                          return dfsph_pair_term(P, f.kappa, ki, j, gw);
-                        });
+                        [&](const auto& j, const auto&, const auto&, const auto&, const auto& gw)
+                            SPHFEM_TERM { return dfsph_pair_term(P, f.kappa, ki, j, gw); });
     for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        const Real k = dfsph_wall_pair(P, b, j, ki, b.kappa[j]);
