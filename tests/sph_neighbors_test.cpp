@@ -126,4 +126,66 @@ TEST(SphNeighbors, RadixSortIsStableAndMatchesStdSort) {
   }
 }
 
+// The sort of keys that mostly stayed where an earlier sort put them: the stable order for
+// any ranges of that sort (right, stale, empty), with particles appended, and nothing changed
+// where more than a quarter moved.
+TEST(SphNeighbors, SortOfMovedKeysIsTheStableSort) {
+  CpuExec ex;
+  std::mt19937 rng(7);
+  const int cells = 700, n = 8000;
+  // An earlier sort's keys and ranges.
+  std::vector<std::uint32_t> before(n);
+  for (std::uint32_t& key : before) key = rng() % std::uint32_t(cells);
+  std::sort(before.begin(), before.end());
+  std::vector<std::uint32_t> start(cells + 1, 0);
+  for (int c = 0, i = 0; c <= cells; ++c) {
+    while (i < n && before[std::size_t(i)] < std::uint32_t(c)) ++i;
+    start[std::size_t(c)] = std::uint32_t(i);
+  }
+  std::vector<std::uint32_t> stale(start);  // other ranges, still monotone
+  for (std::uint32_t& s : stale) s = rng() % std::uint32_t(n + 1);
+  std::sort(stale.begin(), stale.end());
+  const std::vector<std::uint32_t> none(cells + 1, 0);
+  struct Case {
+    const char* what;
+    double moved;
+    int appended;
+    const std::vector<std::uint32_t>* start;
+    bool sorts;
+  };
+  const Case cases[] = {{"3 % moved", 0.03, 0, &start, true},
+                        {"3 % moved, 50 appended", 0.03, 50, &start, true},
+                        {"none moved", 0.0, 0, &start, true},
+                        {"stale ranges", 0.03, 0, &stale, false},
+                        {"no earlier sort", 0.03, 0, &none, false},
+                        {"40 % moved", 0.4, 0, &start, false}};
+  for (const Case& t : cases) {
+    std::vector<std::uint32_t> k(before);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (std::uint32_t& key : k)
+      if (u(rng) < t.moved) {
+        const int step = int(rng() % 3) == 0 ? 40 : 1;  // a neighbouring cell or a layer away
+        key = std::uint32_t(std::clamp(int(key) + (rng() % 2 ? step : -step), 0, cells - 1));
+      }
+    for (int a = 0; a < t.appended; ++a) k.push_back(rng() % std::uint32_t(cells));
+    const int m = int(k.size());
+    std::vector<std::uint32_t> v(static_cast<std::size_t>(m));
+    for (int i = 0; i < m; ++i) v[std::size_t(i)] = std::uint32_t(1000000 + i);
+    std::vector<std::uint32_t> rk(k), rv(v);
+    sort_pairs(ex, rk.data(), rv.data(), m, 10);
+    const std::vector<std::uint32_t> k0(k), v0(v);
+    const bool sorted = sort_moved(ex, k.data(), v.data(), m, t.start->data(), cells);
+    if (t.sorts) {
+      EXPECT_TRUE(sorted) << t.what;
+    }
+    if (sorted) {
+      EXPECT_EQ(k, rk) << t.what;
+      EXPECT_EQ(v, rv) << t.what;
+    } else {
+      EXPECT_EQ(k, k0) << t.what;
+      EXPECT_EQ(v, v0) << t.what;
+    }
+  }
+}
+
 }  // namespace

@@ -48,6 +48,57 @@ void sort_pairs(CpuExec& ex, std::uint32_t* keys, std::uint32_t* vals, int n, in
   }
 }
 
+bool sort_moved(CpuExec& ex, std::uint32_t* keys, std::uint32_t* vals, int n,
+                const std::uint32_t* start, int cells) {
+  if (n <= 1 || cells <= 0) return false;
+  // Where index i stood in the earlier sort: the cell c with start[c] <= i < start[c + 1].
+  // Walked alongside i; c only grows, so the keys kept are in order whatever start holds.
+  const auto stayed = [&](std::uint32_t& c, int i) {
+    if (std::uint32_t(i) >= start[cells]) return false;
+    while (c + 1 < std::uint32_t(cells) && start[c + 1] <= std::uint32_t(i)) ++c;
+    return keys[i] == c;
+  };
+  std::vector<std::uint64_t>& moved = ex.scratch_moved;
+  const std::size_t most = std::size_t(n) / 4;
+  if (moved.capacity() < most) moved.reserve(most);
+  moved.clear();
+  std::uint32_t c = 0;
+  for (int i = 0; i < n; ++i) {
+    if (stayed(c, i)) continue;
+    if (moved.size() == most) return false;
+    moved.push_back(std::uint64_t(keys[i]) << 32 | std::uint32_t(i));
+  }
+  if (moved.empty()) return true;
+  // (key, index) orders both sequences, so their merge is the stable sort.
+  std::sort(moved.begin(), moved.end());
+  for (std::vector<std::uint32_t>* s : {&ex.scratch_keys, &ex.scratch_vals}) {
+    if (s->capacity() < std::size_t(n)) s->reserve(std::size_t(n) + std::size_t(n) / 4);
+    s->resize(std::size_t(n));
+  }
+  std::uint32_t* ko = ex.scratch_keys.data();
+  std::uint32_t* vo = ex.scratch_vals.data();
+  std::size_t m = 0;
+  int o = 0;
+  c = 0;
+  const auto emit_moved = [&] {
+    const std::uint32_t i = std::uint32_t(moved[m]);
+    ko[o] = std::uint32_t(moved[m] >> 32);
+    vo[o++] = vals[i];
+    ++m;
+  };
+  for (int i = 0; i < n; ++i) {
+    if (!stayed(c, i)) continue;
+    const std::uint64_t here = std::uint64_t(keys[i]) << 32 | std::uint32_t(i);
+    while (m < moved.size() && moved[m] < here) emit_moved();
+    ko[o] = keys[i];
+    vo[o++] = vals[i];
+  }
+  while (m < moved.size()) emit_moved();
+  std::memcpy(keys, ko, sizeof(std::uint32_t) * std::size_t(n));
+  std::memcpy(vals, vo, sizeof(std::uint32_t) * std::size_t(n));
+  return true;
+}
+
 namespace {
 int g_threads = 0;
 }

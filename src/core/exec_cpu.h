@@ -15,6 +15,7 @@ namespace sphfem {
 struct CpuExec {
   static constexpr MemSpace kSpace = MemSpace::Host;
   std::vector<std::uint32_t> scratch_keys, scratch_vals;  // radix sort ping-pong
+  std::vector<std::uint64_t> scratch_moved;               // sort_moved's keys that moved
 };
 
 // Items a thread takes at a time. The loops' items are independent (each writes its own
@@ -92,6 +93,15 @@ std::uint32_t exclusive_scan(CpuExec&, const std::uint32_t* in, std::uint32_t* o
 
 // Stable sort of (keys, vals) by the low key_bits of keys (LSD radix sort, 8 bits a pass).
 void sort_pairs(CpuExec&, std::uint32_t* keys, std::uint32_t* vals, int n, int key_bits);
+
+// The same stable sort where most keys are those an earlier sort left in place: start (cells +
+// 1 entries, as cell_starts writes them) the ranges it left, index i in [start[c], start[c +
+// 1]) then holding key c. The keys that still do stay in order; the others (moved, or past
+// start[cells]) are sorted on their own and merged in. Any start gives the stable order, a
+// stale one only more work; returns false, having changed nothing, where more than a quarter
+// moved (sort_pairs is then the faster).
+bool sort_moved(CpuExec&, std::uint32_t* keys, std::uint32_t* vals, int n,
+                const std::uint32_t* start, int cells);
 
 }  // namespace sphfem
 

@@ -87,6 +87,7 @@ struct FluidBuffers {
     nbr_n = Buffer<int>(s, cap);
     for (Buffer<std::uint32_t>* b : {&id, &keys, &perm}) *b = Buffer<std::uint32_t>(s, cap);
     start = Buffer<std::uint32_t>(s, std::size_t(cells) + 1);
+    start.zero();  // no earlier sort (sort_moved)
   }
 
   // Re-orders the first n particles by cell for locality (a radix sort of their cell keys in
@@ -94,7 +95,12 @@ struct FluidBuffers {
   template <class Exec>
   void sort(Exec& ex, const GridView& g, int n, int key_bits, bool dfsph) {
     stages::cell_keys(ex, g, x.data(), keys.data(), perm.data(), n);
-    sort_pairs(ex, keys.data(), perm.data(), n, key_bits);
+    // The host merges the few particles that changed cell since the last sort (start still
+    // holds its ranges); a device sorts them all.
+    bool sorted = false;
+    if constexpr (Exec::kSpace == MemSpace::Host)
+      sorted = sort_moved(ex, keys.data(), perm.data(), n, start.data(), int(g.cells()));
+    if (!sorted) sort_pairs(ex, keys.data(), perm.data(), n, key_bits);
     stages::cell_starts(ex, keys.data(), start.data(), n, g.cells());
     stages::gather(ex, x.data(), tmp3.data(), perm.data(), n);
     x.swap(tmp3);
