@@ -545,6 +545,8 @@ SPHFEM_HD_INLINE void density_at(const SphParams& P, const FluidView& f, const G
   f.flags[i] = flags;
 }
 
+// density() of every particle, its list where list_start puts it without nbr_at (room for
+// nbr_cap a particle); the host's packed lists are written by density_packed.
 template <class Exec>
 void density(Exec& ex, const SphParams P, FluidView f, const GridView g, const Walls w,
              bool with_alpha, const WarmSums warm = WarmSums()) {
