@@ -292,6 +292,51 @@ TEST(SphCells, StoredKernelFactorsGiveTheKernelsBits) {
     EXPECT_GT(listed, n / 2);
   }
 }
+// WCSPH's density pass sums W of the squared distances its list build staged (from the
+// positions' planes); without the planes it gathers x_j again. Both give each density to the
+// bit, for both kernels and with lists that overflow (then summed over the grid).
+TEST(SphCells, StagedDistancesGiveTheDensitysBits) {
+  CpuExec ex;
+  ListScene scene = list_scene();
+  const int n = int(scene.x.size());
+  for (const int kind : {0, 1})
+    for (const int cap : {0, 8}) {
+      SphParams P = scene.P;
+      P.kernel = Kernel(kind, P.h);
+      FluidBuffers fb;
+      fb.allocate(MemSpace::Host, n, P.full_neighbors, scene.g.cells(), /*factors=*/false);
+      if (cap) fb.nbr_cap = cap;
+      fb.x.upload(scene.x.data(), std::size_t(n));
+      fb.v.zero();
+      fb.id.upload(std::vector<std::uint32_t>(std::size_t(n), 0u).data(), std::size_t(n));
+      fb.p.zero();
+      GridView g = scene.g;
+      fb.sort(ex, g, n, 11, /*dfsph=*/false);
+      g.start = fb.start.data();
+      stages::FluidView f = fb.view(n);
+      f.planes = &fb.a.data()[0].x;
+      f.planes_stride = std::size_t(fb.cap) + 1;
+      stages::position_planes(ex, f);
+      fb.list_and_density(ex, P, f, g, stages::Walls(), /*with_alpha=*/false);
+      const std::vector<Real> staged(fb.rho.data(), fb.rho.data() + n);
+      const std::vector<int> counts(fb.nbr_n.data(), fb.nbr_n.data() + n);
+      stages::FluidView gathered = fb.view(n);
+      fb.list_and_density(ex, P, gathered, g, stages::Walls(), /*with_alpha=*/false);
+      int listed = 0;
+      for (int i = 0; i < n; ++i) {
+        ASSERT_EQ(counts[std::size_t(i)], fb.nbr_n.data()[i]) << "particle " << i;
+        listed += counts[std::size_t(i)] > 0;
+        ASSERT_EQ(staged[std::size_t(i)], fb.rho.data()[i])
+            << "kernel " << kind << ", cap " << cap << ", particle " << i;
+        ASSERT_GT(staged[std::size_t(i)], Real(0));
+      }
+      if (cap)
+        EXPECT_LT(listed, n / 2);
+      else
+        EXPECT_GT(listed, n / 2);
+    }
+}
+
 TEST(SphCells, OverflowingListsFallBackToTheGridInEveryLayout) {
   check_lists(8, /*packed=*/false);
   check_lists(8, /*packed=*/true);

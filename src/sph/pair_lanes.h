@@ -178,5 +178,24 @@ SPHFEM_LANE T sum_pairs_stored(const std::uint32_t* list, const Real* factors, i
   return total(acc);
 }
 
+// sum_pairs of the term W alone, from the pairs' squared distances where the list's build
+// staged them in the list's order (collect_neighbors' dist2): the same W of the same r2 in the
+// same lanes, without reading x_j again.
+template <class Kern>
+SPHFEM_LANE Real sum_w_staged(const Kern& kernel, const Real* dist2, int n) {
+  const Kern K = kernel;
+  const I8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
+  R8 acc{};
+  for (int k0 = 0; k0 < n; k0 += kWidth) {
+    const int m = n - k0;
+    const I8 valid = lane < m;
+    R8 r2;
+    __builtin_memcpy(&r2, dist2 + k0, sizeof r2);
+    const R8 w = K.W_at(sqrt(r2));
+    acc = acc + (m >= kWidth ? w : select(valid, w, R8{}));
+  }
+  return total(acc);
+}
+
 }  // namespace sphfem::lanes
 #endif

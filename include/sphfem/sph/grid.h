@@ -127,7 +127,8 @@ inline constexpr std::array<std::uint64_t, 256> kPackHits = pack_hits_table();
 // each plane is followed by seven readable Reals (the z plane too: FluidBuffers::a). Masked
 // loads instead made the scan 1.2x slower.
 inline int collect_from_planes(const GridView& g, const Vec3& xi, Real h2, std::uint32_t* list,
-                               int last, int count, const Real* planes, std::size_t stride) {
+                               int last, int count, const Real* planes, std::size_t stride,
+                               Real* dist2 = nullptr) {
   typedef float F8 __attribute__((vector_size(32)));
   constexpr int kRowGroups = 4;  // a row of three cells at rest holds about 24 candidates
   const CellRows c(g, xi, h2);
@@ -169,10 +170,14 @@ inline int collect_from_planes(const GridView& g, const Vec3& xi, Real h2, std::
       const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(int(j0)), lane);
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(list + count),
                           _mm256_permutevar8x32_epi32(idx, to_front));
+      if (dist2) _mm256_storeu_ps(dist2 + count, _mm256_permutevar8x32_ps(__m256(r2), to_front));
       count += __builtin_popcount(unsigned(hits));
     } else {
       for (int k = 0; k < 8; ++k)
-        if (hits & (1 << k)) list[count < last ? count : last] = j0 + std::uint32_t(k), ++count;
+        if (hits & (1 << k)) {
+          if (dist2) dist2[count < last ? count : last] = r2[k];
+          list[count < last ? count : last] = j0 + std::uint32_t(k), ++count;
+        }
     }
   };
   if (!long_row) {
@@ -204,12 +209,16 @@ inline int collect_from_planes(const GridView& g, const Vec3& xi, Real h2, std::
 // planes: the same positions as three arrays (all x, then all y, then all z, each `stride`
 // long), or nullptr. The host reads eight candidates' coordinates there as three whole vectors
 // instead of taking apart eight Vec3s (six permutes and six blends), with the same arithmetic.
+// dist2: where that path (host, planes, step 1) also stores each hit's squared distance at its
+// list index, as the scan computed it; nullptr, or any other path: nothing stored.
 SPHFEM_HD int collect_neighbors(const GridView& g, const Vec3* xs, const Vec3& xi, Real h2,
                                 std::uint32_t* list, std::size_t step, int last, int count,
-                                const Real* planes = nullptr, std::size_t stride = 0) {
+                                const Real* planes = nullptr, std::size_t stride = 0,
+                                Real* dist2 = nullptr) {
   if (g.nx == 0) return count;
 #if SPHFEM_GRID_PACK && !defined(__CUDA_ARCH__)
-  if (planes && step == 1) return collect_from_planes(g, xi, h2, list, last, count, planes, stride);
+  if (planes && step == 1)
+    return collect_from_planes(g, xi, h2, list, last, count, planes, stride, dist2);
 #endif
   const CellRows c(g, xi, h2);
   for (int z = c.z0; z <= c.z1; ++z)
