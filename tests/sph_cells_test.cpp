@@ -10,7 +10,9 @@
 
 #include "core/exec_cpu.h"
 #include "sph/fluid_buffers.h"
+#include "sph/sample_set.h"
 #include "sph/stages.h"
+#include "sph/wall_lists.h"
 
 using namespace sphfem;
 
@@ -335,6 +337,113 @@ TEST(SphCells, StagedDistancesGiveTheDensitysBits) {
       else
         EXPECT_GT(listed, n / 2);
     }
+}
+
+// The wall samples' fluid neighbours listed by the density pass (WallLists) give the DFSPH
+// sweeps' wall terms to the bit: the density pass's values, each solve's residual, the samples'
+// stiffness and its sum, over two blocks of samples with and without fluid in reach.
+TEST(SphCells, ListedWallSamplesGiveTheScansBits) {
+  CpuExec ex;
+  ListScene scene = list_scene();
+  const SphParams& P = scene.P;
+  const int n = int(scene.x.size());
+  std::vector<Vec3> v(static_cast<std::size_t>(n)), xs;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-1, 1);
+  for (Vec3& vi : v) vi = Vec3(u(rng), u(rng), u(rng));
+  // Three layers under the block and one far above it: 1,764 samples, two of kSumBlock.
+  for (const Real y : {Real(0.05), Real(0.1), Real(0.15), Real(0.85)})
+    for (int a = 0; a < 21; ++a)
+      for (int c = 0; c < 21; ++c)
+        xs.push_back(Vec3(Real(0.05) * Real(a + 1), y, Real(0.05) * Real(c + 1)));
+  const int nb = int(xs.size());
+  ASSERT_GT(nb, kSumBlock);
+  SampleSet<CpuExec> set;
+  GridView geometry = scene.g;
+  geometry.start = nullptr;
+  set.resize(nb, geometry);
+  {
+    Buffer<Vec3> x(MemSpace::Host, std::size_t(nb));
+    Buffer<std::uint32_t> keys(MemSpace::Host, std::size_t(nb)),
+        perm(MemSpace::Host, std::size_t(nb));
+    x.upload(xs.data(), std::size_t(nb));
+    stages::cell_keys(ex, set.grid(), x.data(), keys.data(), perm.data(), nb);
+    sort_pairs(ex, keys.data(), perm.data(), nb, 11);
+    stages::gather(ex, x.data(), set.x.data(), perm.data(), nb);
+    stages::cell_starts(ex, keys.data(), set.start.data(), nb, set.grid().cells());
+    std::vector<Real> psi(std::size_t(nb), P.mass);
+    set.psi.upload(psi.data(), std::size_t(nb));
+  }
+  stages::wall_rest(ex, P, set.rest.data(), set.nb_rest.data(), set.view(nb));
+  FluidBuffers fb;
+  fb.allocate(MemSpace::Host, n, P.full_neighbors, scene.g.cells(), /*factors=*/true);
+  fb.x.upload(scene.x.data(), std::size_t(n));
+  fb.v.upload(v.data(), std::size_t(n));
+  fb.id.upload(std::vector<std::uint32_t>(std::size_t(n), 0u).data(), std::size_t(n));
+  fb.p.zero();
+  fb.warm_div.zero();
+  fb.warm_dens.zero();
+  GridView g = scene.g;
+  fb.sort(ex, g, n, 11, /*dfsph=*/true);
+  g.start = fb.start.data();
+  stages::FluidView f = fb.view(n);
+  stages::WarmSums warm;
+  warm.dens_w = fb.kappa.data();
+  warm.dens_kw = fb.ksum.data();
+  stages::Walls w;
+  w.fixed = set.view(nb);
+  fb.list_and_density(ex, P, f, g, w, /*with_alpha=*/true, warm);
+  f = fb.view(n);
+  stages::fluid_reach(ex, P, f);
+
+  auto copy = [](const Real* a, int m) { return std::vector<Real>(a, a + m); };
+  const int scanned = stages::wall_density(ex, P, f, g, set.view(nb));
+  const std::vector<Real> rho = copy(set.rho.data(), nb), alpha = copy(set.alpha.data(), nb),
+                          wdiv = copy(set.warm_div.data(), nb),
+                          wdens = copy(set.warm_dens.data(), nb);
+  set.rho.zero();
+  set.alpha.zero();
+  WallLists lists;
+  const int listed = lists.density(ex, P, f, g, set.view(nb));
+  EXPECT_EQ(listed, scanned);
+  EXPECT_GT(listed, 200);
+  EXPECT_LT(listed, nb - 441);  // the far layer has no fluid in reach
+  for (int k = 0; k < nb; ++k) {
+    ASSERT_EQ(rho[std::size_t(k)], set.rho.data()[k]) << "sample " << k;
+    ASSERT_EQ(alpha[std::size_t(k)], set.alpha.data()[k]) << "sample " << k;
+    ASSERT_EQ(wdiv[std::size_t(k)], set.warm_div.data()[k]) << "sample " << k;
+    ASSERT_EQ(wdens[std::size_t(k)], set.warm_dens.data()[k]) << "sample " << k;
+  }
+  stages::BoundaryView with = set.view(nb);
+  lists.attach(with);
+  ASSERT_NE(with.listed, nullptr);
+  ASSERT_EQ(with.n_listed, listed);
+  EXPECT_GT(with.block_first[1], 0u);  // both blocks hold listed samples
+  EXPECT_GT(with.block_first[2], with.block_first[1]);
+  for (const bool divergence : {true, false}) {
+    std::vector<Real> kappa[2], ksum[2];
+    double sum[2][2];
+    for (int run = 0; run < 2; ++run) {
+      const stages::BoundaryView b = run ? with : set.view(nb);
+      stages::wall_warm_start(ex, b, divergence);
+      for (int sweep = 0; sweep < 2; ++sweep) {
+        sum[run][sweep] = stages::wall_source(ex, P, f, g, b, Real(1e-3), Real(0.5), divergence);
+        stages::wall_accumulate(ex, b);
+      }
+      kappa[run] = copy(set.kappa.data(), nb);
+      ksum[run] = copy(set.kappa_sum.data(), nb);
+    }
+    EXPECT_NE(sum[0][0], 0.0);
+    for (int sweep = 0; sweep < 2; ++sweep) EXPECT_EQ(sum[0][sweep], sum[1][sweep]);
+    for (int k = 0; k < nb; ++k) {
+      ASSERT_EQ(kappa[0][std::size_t(k)], kappa[1][std::size_t(k)]) << "sample " << k;
+      ASSERT_EQ(ksum[0][std::size_t(k)], ksum[1][std::size_t(k)]) << "sample " << k;
+    }
+  }
+  lists.invalidate();
+  stages::BoundaryView without = set.view(nb);
+  lists.attach(without);
+  EXPECT_EQ(without.listed, nullptr);
 }
 
 TEST(SphCells, OverflowingListsFallBackToTheGridInEveryLayout) {

@@ -88,6 +88,29 @@ double reduce_sum(CpuExec&, int n, F f) {
   return s;
 }
 
+// reduce_sum of an f that is 0 but at some listed indices, ascending: first[b] is the first of
+// them in block b of kSumBlock indices (blocks + 1 entries), g(p) is f at the p-th. The blocks
+// and their order are reduce_sum's, and a 0 added leaves a sum as it was: the same bits.
+template <class G>
+double reduce_sum_listed(CpuExec&, int n, const std::uint32_t* first, G g) {
+  const int blocks = n > 0 ? (n + kSumBlock - 1) / kSumBlock : 0;
+  if (blocks <= 1) {
+    double s = 0.0;
+    for (std::uint32_t p = first[0]; p < first[blocks]; ++p) s += double(g(int(p)));
+    return s;
+  }
+  std::vector<double> part(std::size_t(blocks), 0.0);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int b = 0; b < blocks; ++b) {
+    double s = 0.0;
+    for (std::uint32_t p = first[b]; p < first[b + 1]; ++p) s += double(g(int(p)));
+    part[std::size_t(b)] = s;
+  }
+  double s = 0.0;
+  for (double v : part) s += v;
+  return s;
+}
+
 // out[i] = in[0] + ... + in[i-1]; returns the total. in and out may alias.
 std::uint32_t exclusive_scan(CpuExec&, const std::uint32_t* in, std::uint32_t* out, int n);
 

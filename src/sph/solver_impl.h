@@ -14,6 +14,7 @@
 #include "sph/moving_samples.h"
 #include "sph/sample_set.h"
 #include "sph/stages.h"
+#include "sph/wall_lists.h"
 #include "sphfem/core/memory.h"
 #include "sphfem/sph/solver.h"
 
@@ -100,6 +101,7 @@ class SolverT final : public FluidSolver {
   }
 
   void sort(const MovingSurface& moving) override {
+    forget_wall_lists();
     moving_.place(ex_, P_, moving, key_bits());
     fluid_.sort(ex_, grid(fluid_.start.data()), n_, key_bits(), model_.solver == SolverKind::DFSPH);
     // Where the supports end, for the wall passes of this step (until drift moves the fluid).
@@ -131,8 +133,13 @@ class SolverT final : public FluidSolver {
     }
     fluid_.list_and_density(ex_, P_, f, g, w, dfsph, warm);
     if (dfsph) {
-      active_walls_ = stages::wall_density(ex_, P_, f, g, w.fixed);
-      if (w.moving.n) active_walls_ += stages::wall_density(ex_, P_, f, g, w.moving);
+      if constexpr (Exec::kSpace == MemSpace::Host) {
+        active_walls_ = tank_lists_.density(ex_, P_, f, g, w.fixed);
+        if (w.moving.n) active_walls_ += moving_lists_.density(ex_, P_, f, g, w.moving);
+      } else {
+        active_walls_ = stages::wall_density(ex_, P_, f, g, w.fixed);
+        if (w.moving.n) active_walls_ += stages::wall_density(ex_, P_, f, g, w.moving);
+      }
       fluid_.p.zero();
     }
     exec_sync(ex_);
@@ -207,6 +214,7 @@ class SolverT final : public FluidSolver {
   void drift(const DriftLimits& limits, StepInfo& info) override {
     info.clamped = stages::drift(ex_, P_, view(), Real(dt_), limits.travel, limits.surface_v);
     reached_.reached = 0;
+    forget_wall_lists();
     exec_sync(ex_);
     t_ += dt_;
     ++steps_;
@@ -234,6 +242,7 @@ class SolverT final : public FluidSolver {
   // (scratch buffers only) and returned in the state's order, which stays as it is.
   void snapshot(FluidSnapshot& out, SurfaceQuery* surfaces) override {
     if (!surfaces) surfaces = hook_;
+    forget_wall_lists();  // the moving samples are placed again
     const bool dfsph = model_.solver == SolverKind::DFSPH;
     const int n = n_;
     const GridView g = grid(fluid_.start.data());
@@ -313,6 +322,7 @@ class SolverT final : public FluidSolver {
                                   " emitters, the model has " + std::to_string(travelled_.size()));
     n_ = s.n;
     reached_.reached = 0;
+    forget_wall_lists();
     t_ = s.time;
     steps_ = s.steps;
     next_id_ = s.next_id;
@@ -352,6 +362,10 @@ class SolverT final : public FluidSolver {
     Walls w;
     w.fixed = tank();
     w.moving = moving_.view();
+    if constexpr (Exec::kSpace == MemSpace::Host) {
+      tank_lists_.attach(w.fixed);
+      if (w.moving.n) moving_lists_.attach(w.moving);
+    }
     if (prox_.dist && prox_.normal) {
       w.surface.dist = prox_.dist;
       w.surface.normal = prox_.normal;
@@ -382,6 +396,13 @@ class SolverT final : public FluidSolver {
   }
 
   int key_bits() const { return cell_key_bits(model_.grid.cells()); }
+
+  // The samples' lists of their fluid neighbours hold from the density pass until the fluid
+  // or the moving samples move (WallLists).
+  void forget_wall_lists() {
+    tank_lists_.invalidate();
+    moving_lists_.invalidate();
+  }
 
   // The model less its arrays of particles and samples, which the buffers hold from here on
   // (not kept twice: 61 B a particle in the dam break).
@@ -543,13 +564,14 @@ class SolverT final : public FluidSolver {
   int n_ = 0, cap_ = 0;
   double t_ = 0, last_error_ = 0;
   long steps_ = 0;
-  FluidBuffers fluid_;          // state and scratch, see sph/fluid_buffers.h
-  SampleSet<Exec> tank_;        // the tank's wall samples (upload_tank)
-  int tank_n_ = 0;              // how many
-  Vec3 quiet_lo_, quiet_hi_;    // BoundaryView::quiet_lo of the tank
-  FluidView reached_;           // FluidView::reach_lo of this step (sort), until drift
-  MovingSamples<Exec> moving_;  // boundary-particle coupling: samples on a moving surface
-  int active_walls_ = 0;        // wall samples with fluid in reach (DFSPH)
+  FluidBuffers fluid_;                   // state and scratch, see sph/fluid_buffers.h
+  SampleSet<Exec> tank_;                 // the tank's wall samples (upload_tank)
+  int tank_n_ = 0;                       // how many
+  Vec3 quiet_lo_, quiet_hi_;             // BoundaryView::quiet_lo of the tank
+  FluidView reached_;                    // FluidView::reach_lo of this step (sort), until drift
+  MovingSamples<Exec> moving_;           // boundary-particle coupling: samples on a moving surface
+  int active_walls_ = 0;                 // wall samples with fluid in reach (DFSPH)
+  WallLists tank_lists_, moving_lists_;  // the host's, under DFSPH
   std::vector<Buffer<Vec3>> discs_;
   std::vector<double> travelled_;
   std::vector<std::uint8_t> emitter_on_;  // per emitter: a control input, not saved state

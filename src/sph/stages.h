@@ -216,6 +216,16 @@ struct BoundaryView {
   Real* warm_div = nullptr;      // DFSPH warm starts (wall_density)
   Real* warm_dens = nullptr;
   const Vec3* v = nullptr;  // velocity of moving samples; nullptr: at rest
+  // The host under DFSPH, from wall_density until the fluid moves (WallLists): the samples
+  // with fluid in reach, ascending (n_listed); where each one's fluid neighbours lie in
+  // fluid_list, in the grid scan's order; and per block of kSumBlock samples where its listed
+  // ones begin (blocks + 1 entries). nullptr: the passes scan the fluid's grid.
+  const std::uint32_t* listed = nullptr;
+  const std::uint32_t* listed_at = nullptr;  // [listed_at[p], listed_end[p]) in fluid_list
+  const std::uint32_t* listed_end = nullptr;
+  const std::uint32_t* fluid_list = nullptr;
+  const std::uint32_t* block_first = nullptr;
+  int n_listed = 0;
   GridView grid;
   // No sample is within reach of a point strictly inside (quiet_lo, quiet_hi): for the tank,
   // the domain shrunk by the support (its samples all lie beyond its faces). Empty by default.
@@ -967,26 +977,56 @@ double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g, 
 // to the sample) pushed about 1.8 times too hard, the sweeps took it back every step, and a
 // resting column kept boiling (kinetic energy 30 times WCSPH's, the force on the nodes off
 // by +-20 % from step to step, the pressure 15-20 % low).
+// wall_source of sample k; fluid(f) calls f(j, r, r2) for its fluid neighbours in the grid
+// scan's order.
+template <class Fluid>
+SPHFEM_HD_INLINE Real wall_source_at(const SphParams& P, const FluidView& f, const BoundaryView& b,
+                                     Real dt, Real pos_rate, bool divergence, int k,
+                                     const Fluid& fluid) {
+  const Real alpha = b.alpha[k];
+  if (alpha <= Real(0)) {
+    b.kappa[k] = Real(0);
+    return Real(0);
+  }
+  Real d = 0;
+  const Vec3 vb = b.v ? b.v[k] : Vec3();
+  const Real vol = b.psi[k] / P.rho0;
+  fluid([&](std::uint32_t j, const Vec3& r, Real r2) {
+    const Vec3 vj = b.v ? f.v[j] - vb : f.v[j];
+    d -= vol * dot(vj, P.kernel.grad(r, std::sqrt(r2)));
+  });
+  const Real scale = b.psi[k] / P.mass;
+  Real err = divergence ? d * dt : (b.rho[k] / P.rho0 - Real(1)) * scale * pos_rate + dt * d;
+  if (divergence && !b.full[k] && err > Real(0)) err = Real(0);
+  return dfsph_update(err, alpha, b.kappa_sum[k], dt, b.kappa[k]);
+}
+
+// The fluid neighbours of listed sample p (BoundaryView::listed), as for_neighbors gives them.
+template <class F>
+SPHFEM_HD_INLINE void for_listed_fluid(const BoundaryView& b, const FluidView& f, int p, F&& fn) {
+  const Vec3 xb = b.x[b.listed[p]];
+  for (std::uint32_t q = b.listed_at[p]; q < b.listed_end[p]; ++q) {
+    const std::uint32_t j = b.fluid_list[q];
+    const Vec3 r = xb - f.x[j];
+    fn(j, r, norm2(r));
+  }
+}
+
 template <class Exec>
 double wall_source(Exec& ex, const SphParams P, const FluidView f, const GridView g, BoundaryView b,
                    Real dt, Real pos_rate, bool divergence) {
+  if constexpr (Exec::kSpace == MemSpace::Host) {
+    // The samples without fluid in reach hold kappa 0 from their warm start (wall_density
+    // gave them none) and add 0 to the sum: only the listed ones are visited.
+    if (b.listed)
+      return reduce_sum_listed(ex, b.n, b.block_first, [=](int p) -> double {
+        return double(wall_source_at(P, f, b, dt, pos_rate, divergence, int(b.listed[p]),
+                                     [&](auto&& fn) { for_listed_fluid(b, f, p, fn); }));
+      });
+  }
   return reduce_sum(ex, b.n, [=] SPHFEM_LAMBDA(int k) -> double {
-    const Real alpha = b.alpha[k];
-    if (alpha <= Real(0)) {
-      b.kappa[k] = Real(0);
-      return 0.0;
-    }
-    Real d = 0;
-    const Vec3 vb = b.v ? b.v[k] : Vec3();
-    const Real vol = b.psi[k] / P.rho0;
-    for_neighbors(g, f.x, b.x[k], P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      const Vec3 vj = b.v ? f.v[j] - vb : f.v[j];
-      d -= vol * dot(vj, P.kernel.grad(r, std::sqrt(r2)));
-    });
-    const Real scale = b.psi[k] / P.mass;
-    Real err = divergence ? d * dt : (b.rho[k] / P.rho0 - Real(1)) * scale * pos_rate + dt * d;
-    if (divergence && !b.full[k] && err > Real(0)) err = Real(0);
-    return double(dfsph_update(err, alpha, b.kappa_sum[k], dt, b.kappa[k]));
+    return double(wall_source_at(P, f, b, dt, pos_rate, divergence, k,
+                                 [&](auto&& fn) { for_neighbors(g, f.x, b.x[k], P.h2, fn); }));
   });
 }
 
@@ -1000,39 +1040,50 @@ double wall_source(Exec& ex, const SphParams P, const FluidView f, const GridVie
 // average of the fluid's, plus the hydrostatic head g . (x_b - x_f) for the density solve
 // (Adami et al. 2012, eq. 27): a sample keeps no stiffness of its own, as the fluid in front of
 // it changes. Returns how many samples take part.
+// wall_density of sample k; hit(j) is called for each fluid neighbour j in the scan's order.
+// Returns their number.
+template <class Hit>
+SPHFEM_HD_INLINE int wall_density_at(const SphParams& P, const FluidView& f, const GridView& g,
+                                     const BoundaryView& b, int k, const Hit& hit) {
+  const Vec3 xb = b.x[k];
+  Real sum = 0, grad2 = 0, shared = 0, kdiv = 0, kdens = 0;
+  Vec3 srw;
+  int count = 0;
+  const Real vol = b.psi[k] / P.rho0;
+  if (!out_of_reach(f, xb))
+    for_neighbors(g, f.x, xb, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+      hit(j);
+      const Real rr = std::sqrt(r2);
+      const Vec3 gw = P.kernel.grad(r, rr) * vol;
+      const Real w = P.kernel.W(rr);
+      sum += w;
+      grad2 += norm2(gw);
+      shared -= dot(gw, f.gwall[j]);
+      kdiv += f.warm_div[j] * w;
+      kdens += f.warm_dens[j] * w;
+      srw += r * w;
+      ++count;
+    });
+  b.rho[k] = b.rest[k] + P.mass * sum;
+  b.full[k] = b.nb_rest[k] + count >= full_neighborhood(P) ? 1 : 0;
+  const Real diag = shared > grad2 ? shared : grad2;
+  b.alpha[k] = grad2 > Real(1e-6) ? Real(1) / diag : Real(0);
+  Real wdiv = 0, wdens = 0;
+  if (count > 0) {
+    wdiv = kdiv / sum;
+    wdens = (kdens + dot(P.gravity, srw)) / sum;
+  }
+  b.warm_div[k] = wdiv > Real(0) ? wdiv : Real(0);
+  b.warm_dens[k] = wdens > Real(0) ? wdens : Real(0);
+  return count;
+}
+
+// The samples' part of the step (above); returns how many have fluid in reach. The host's
+// WallLists::density also lists their fluid neighbours for the sweeps.
 template <class Exec>
 int wall_density(Exec& ex, const SphParams P, const FluidView f, const GridView g, BoundaryView b) {
   const double active = reduce_sum(ex, b.n, [=] SPHFEM_LAMBDA(int k) -> double {
-    const Vec3 xb = b.x[k];
-    Real sum = 0, grad2 = 0, shared = 0, kdiv = 0, kdens = 0;
-    Vec3 srw;
-    int count = 0;
-    const Real vol = b.psi[k] / P.rho0;
-    if (!out_of_reach(f, xb))
-      for_neighbors(g, f.x, xb, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-        const Real rr = std::sqrt(r2);
-        const Vec3 gw = P.kernel.grad(r, rr) * vol;
-        const Real w = P.kernel.W(rr);
-        sum += w;
-        grad2 += norm2(gw);
-        shared -= dot(gw, f.gwall[j]);
-        kdiv += f.warm_div[j] * w;
-        kdens += f.warm_dens[j] * w;
-        srw += r * w;
-        ++count;
-      });
-    b.rho[k] = b.rest[k] + P.mass * sum;
-    b.full[k] = b.nb_rest[k] + count >= full_neighborhood(P) ? 1 : 0;
-    const Real diag = shared > grad2 ? shared : grad2;
-    b.alpha[k] = grad2 > Real(1e-6) ? Real(1) / diag : Real(0);
-    Real wdiv = 0, wdens = 0;
-    if (count > 0) {
-      wdiv = kdiv / sum;
-      wdens = (kdens + dot(P.gravity, srw)) / sum;
-    }
-    b.warm_div[k] = wdiv > Real(0) ? wdiv : Real(0);
-    b.warm_dens[k] = wdens > Real(0) ? wdens : Real(0);
-    return count > 0 ? 1.0 : 0.0;
+    return wall_density_at(P, f, g, b, k, [](std::uint32_t) {}) > 0 ? 1.0 : 0.0;
   });
   return int(active + 0.5);
 }
@@ -1159,6 +1210,16 @@ void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, con
 // After a sweep: the samples' stiffness joins their sums.
 template <class Exec>
 void wall_accumulate(Exec& ex, const BoundaryView b) {
+  if constexpr (Exec::kSpace == MemSpace::Host) {
+    // The others' kappa is 0 (wall_source).
+    if (b.listed) {
+      parallel_for(ex, b.n_listed, [=](int p) {
+        const std::uint32_t k = b.listed[p];
+        b.kappa_sum[k] += b.kappa[k];
+      });
+      return;
+    }
+  }
   parallel_for(ex, b.n, [=] SPHFEM_LAMBDA(int k) { b.kappa_sum[k] += b.kappa[k]; });
 }
 
