@@ -95,6 +95,28 @@ ListScene list_scene() {
   return s;
 }
 
+// The scene's particles in fb at velocities v (none: at rest), sorted into g (its starts
+// fb's); nbr_cap > 0 overrides the lists' room. Lists as DFSPH keeps them where dfsph.
+void load_sorted(FluidBuffers& fb, const ListScene& s, const SphParams& P,
+                 const std::vector<Vec3>& v, bool dfsph, GridView& g, int nbr_cap = 0) {
+  CpuExec ex;
+  const int n = int(s.x.size());
+  fb.allocate(MemSpace::Host, n, P.full_neighbors, s.g.cells(), /*factors=*/dfsph);
+  if (nbr_cap > 0) fb.nbr_cap = nbr_cap;
+  fb.x.upload(s.x.data(), std::size_t(n));
+  if (v.empty())
+    fb.v.zero();
+  else
+    fb.v.upload(v.data(), std::size_t(n));
+  fb.id.upload(std::vector<std::uint32_t>(std::size_t(n), 0u).data(), std::size_t(n));
+  fb.p.zero();
+  fb.warm_div.zero();
+  fb.warm_dens.zero();
+  g = s.g;
+  fb.sort(ex, g, n, 11, dfsph);
+  g.start = fb.start.data();
+}
+
 // density() stores each particle's fluid neighbours; for_fluid_neighbors and for_fluid_pairs
 // (with the kernel's values) must give them back in the grid's order, in every layout (the
 // host's, packed or not, and a device's), and they must be the brute-force neighbour set.
@@ -256,14 +278,8 @@ TEST(SphCells, StoredKernelFactorsGiveTheKernelsBits) {
     SphParams P = scene.P;
     P.kernel = Kernel(kind, P.h);
     FluidBuffers fb;
-    fb.allocate(MemSpace::Host, n, P.full_neighbors, scene.g.cells(), /*factors=*/true);
-    fb.x.upload(scene.x.data(), std::size_t(n));
-    fb.v.upload(v.data(), std::size_t(n));
-    fb.id.upload(std::vector<std::uint32_t>(std::size_t(n), 0u).data(), std::size_t(n));
-    fb.p.zero();
-    GridView g = scene.g;
-    fb.sort(ex, g, n, 11, /*dfsph=*/true);
-    g.start = fb.start.data();
+    GridView g;
+    load_sorted(fb, scene, P, v, /*dfsph=*/true, g);
     stages::FluidView f = fb.view(n);
     ASSERT_NE(f.nbr_gs, nullptr);
     stages::WarmSums warm;
@@ -306,15 +322,8 @@ TEST(SphCells, StagedDistancesGiveTheDensitysBits) {
       SphParams P = scene.P;
       P.kernel = Kernel(kind, P.h);
       FluidBuffers fb;
-      fb.allocate(MemSpace::Host, n, P.full_neighbors, scene.g.cells(), /*factors=*/false);
-      if (cap) fb.nbr_cap = cap;
-      fb.x.upload(scene.x.data(), std::size_t(n));
-      fb.v.zero();
-      fb.id.upload(std::vector<std::uint32_t>(std::size_t(n), 0u).data(), std::size_t(n));
-      fb.p.zero();
-      GridView g = scene.g;
-      fb.sort(ex, g, n, 11, /*dfsph=*/false);
-      g.start = fb.start.data();
+      GridView g;
+      load_sorted(fb, scene, P, {}, /*dfsph=*/false, g, cap);
       stages::FluidView f = fb.view(n);
       f.planes = &fb.a.data()[0].x;
       f.planes_stride = std::size_t(fb.cap) + 1;
@@ -376,16 +385,8 @@ TEST(SphCells, ListedWallSamplesGiveTheScansBits) {
   }
   stages::wall_rest(ex, P, set.rest.data(), set.nb_rest.data(), set.view(nb));
   FluidBuffers fb;
-  fb.allocate(MemSpace::Host, n, P.full_neighbors, scene.g.cells(), /*factors=*/true);
-  fb.x.upload(scene.x.data(), std::size_t(n));
-  fb.v.upload(v.data(), std::size_t(n));
-  fb.id.upload(std::vector<std::uint32_t>(std::size_t(n), 0u).data(), std::size_t(n));
-  fb.p.zero();
-  fb.warm_div.zero();
-  fb.warm_dens.zero();
-  GridView g = scene.g;
-  fb.sort(ex, g, n, 11, /*dfsph=*/true);
-  g.start = fb.start.data();
+  GridView g;
+  load_sorted(fb, scene, P, v, /*dfsph=*/true, g);
   stages::FluidView f = fb.view(n);
   stages::WarmSums warm;
   warm.dens_w = fb.kappa.data();
