@@ -127,14 +127,18 @@ struct Of<Vec3> {
   using type = V8;
 };
 
-// The sum over list[0..n) of term(j, rij, r2, W, grad W) with rij = xi - x_j (W only when
-// WithW, else 0), kWidth pairs at a time; the list is padded to whole groups with i itself
-// (stages::listed_end), whose lanes' terms are dropped. Store: factors is where to store
-// each pair's gradient factor (the padding's too, 0), or nullptr.
-template <bool WithW, class T, bool Store, class Kern, class Term>
-SPHFEM_LANE T sum_pairs(const Kern& kernel, const std::uint32_t* list, int n, const Vec3* x,
-                        const Vec3& xi, Term& term, Real* factors) {
-  const Kern K = kernel;  // a local copy: no store in the loop can change it
+// What a group of eight pairs hands its term besides j, rij and r2: W (0 where the pass takes
+// none) and the gradient's factor, grad W = rij * gs.
+struct WG {
+  R8 w, gs;
+};
+
+// The sum over list[0..n) of term(j, rij, r2, W, grad W) with rij = xi - x_j, kWidth pairs at
+// a time; kernel(k0, r2) gives the group's WG. The list is padded to whole groups with i
+// itself (stages::listed_end), whose lanes' terms are dropped.
+template <class T, class Term, class Kernel>
+SPHFEM_LANE T sum_groups(const std::uint32_t* list, int n, const Vec3* x, const Vec3& xi,
+                         Term& term, const Kernel& kernel) {
   const I8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
   typename Of<T>::type acc{};
   for (int k0 = 0; k0 < n; k0 += kWidth) {
@@ -143,18 +147,26 @@ SPHFEM_LANE T sum_pairs(const Kern& kernel, const std::uint32_t* list, int n, co
     const J8 j{list + k0};
     const V8 r = xi - at(x, j);
     const R8 r2 = norm2(r);
-    const R8 rr = sqrt(r2);
-    const R8 w = WithW ? K.W_at(rr) : R8{};
-    // Written twice, so that g++ computes the factor only where a term or the store takes it
-    // (the WCSPH density's terms do not, and store nothing).
-    if (Store && factors) {
-      const R8 gs = K.gscale_at(rr);
-      __builtin_memcpy(factors + k0, &gs, sizeof gs);
-    }
-    const auto t = term(j, r, r2, w, r * K.gscale_at(rr));
+    const WG p = kernel(k0, r2);
+    const auto t = term(j, r, r2, p.w, r * p.gs);
     acc = acc + (m >= kWidth ? t : select(valid, t, decltype(t){}));
   }
   return total(acc);
+}
+
+// sum_groups with the kernel's W (only when WithW, else 0) and gradient. Store: factors is
+// where to store each pair's gradient factor (the padding's too), or nullptr. g++ computes
+// the factor only where a term or the store takes it (the WCSPH density's terms do not).
+template <bool WithW, class T, bool Store, class Kern, class Term>
+SPHFEM_LANE T sum_pairs(const Kern& kernel, const std::uint32_t* list, int n, const Vec3* x,
+                        const Vec3& xi, Term& term, Real* factors) {
+  const Kern K = kernel;  // a local copy: no store in the loop can change it
+  return sum_groups<T>(list, n, x, xi, term, [&](int k0, R8 r2) SPHFEM_TERM {
+    const R8 rr = sqrt(r2);
+    const R8 gs = K.gscale_at(rr);
+    if (Store && factors) __builtin_memcpy(factors + k0, &gs, sizeof gs);
+    return WG{WithW ? K.W_at(rr) : R8{}, gs};
+  });
 }
 
 // The same without W, each pair's gradient factor read from where sum_pairs stored it for the
@@ -163,19 +175,11 @@ SPHFEM_LANE T sum_pairs(const Kern& kernel, const std::uint32_t* list, int n, co
 template <class T, class Term>
 SPHFEM_LANE T sum_pairs_stored(const std::uint32_t* list, const Real* factors, int n, const Vec3* x,
                                const Vec3& xi, Term& term) {
-  const I8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
-  typename Of<T>::type acc{};
-  for (int k0 = 0; k0 < n; k0 += kWidth) {
-    const int m = n - k0;
-    const I8 valid = lane < m;
-    const J8 j{list + k0};
-    const V8 r = xi - at(x, j);
+  return sum_groups<T>(list, n, x, xi, term, [&](int k0, R8) SPHFEM_TERM {
     R8 gs;
     __builtin_memcpy(&gs, factors + k0, sizeof gs);
-    const auto t = term(j, r, norm2(r), R8{}, r * gs);
-    acc = acc + (m >= kWidth ? t : select(valid, t, decltype(t){}));
-  }
-  return total(acc);
+    return WG{R8{}, gs};
+  });
 }
 
 // sum_pairs of the term W alone, from the pairs' squared distances where the list's build
