@@ -8,6 +8,7 @@
 
 #include "core/exec_cpu.h"
 #include "sph/stages.h"
+#include "sphfem/core/backend.h"
 
 using namespace sphfem;
 
@@ -159,33 +160,35 @@ TEST(SphNeighbors, SortOfMovedKeysIsTheStableSort) {
                         {"stale ranges", 0.03, 0, &stale, false},
                         {"no earlier sort", 0.03, 0, &none, false},
                         {"40 % moved", 0.4, 0, &start, false}};
-  for (const Case& t : cases) {
-    std::vector<std::uint32_t> k(before);
-    std::uniform_real_distribution<double> u(0, 1);
-    for (std::uint32_t& key : k)
-      if (u(rng) < t.moved) {
-        const int step = int(rng() % 3) == 0 ? 40 : 1;  // a neighbouring cell or a layer away
-        key = std::uint32_t(std::clamp(int(key) + (rng() % 2 ? step : -step), 0, cells - 1));
+  const int threads = cpu_threads();
+  for (const int parts : {1, 2, 3})
+    for (const Case& t : cases) {
+      set_cpu_threads(parts);  // sort_moved splits the indices a part a thread
+      std::vector<std::uint32_t> k(before);
+      std::uniform_real_distribution<double> u(0, 1);
+      for (std::uint32_t& key : k)
+        if (u(rng) < t.moved) {
+          const int step = int(rng() % 3) == 0 ? 40 : 1;  // a neighbouring cell or a layer away
+          key = std::uint32_t(std::clamp(int(key) + (rng() % 2 ? step : -step), 0, cells - 1));
+        }
+      for (int a = 0; a < t.appended; ++a) k.push_back(rng() % std::uint32_t(cells));
+      const int m = int(k.size());
+      std::vector<std::uint32_t> v(static_cast<std::size_t>(m));
+      for (int i = 0; i < m; ++i) v[std::size_t(i)] = std::uint32_t(1000000 + i);
+      std::vector<std::uint32_t> rk(k), rv(v);
+      sort_pairs(ex, rk.data(), rv.data(), m, 10);
+      const std::vector<std::uint32_t> k0(k), v0(v);
+      const bool sorted = sort_moved(ex, k.data(), v.data(), m, t.start->data(), cells);
+      set_cpu_threads(threads);
+      if (t.sorts) { EXPECT_TRUE(sorted) << t.what << ", " << parts << " threads"; }
+      if (sorted) {
+        EXPECT_EQ(k, rk) << t.what << ", " << parts << " threads";
+        EXPECT_EQ(v, rv) << t.what << ", " << parts << " threads";
+      } else {
+        EXPECT_EQ(k, k0) << t.what << ", " << parts << " threads";
+        EXPECT_EQ(v, v0) << t.what << ", " << parts << " threads";
       }
-    for (int a = 0; a < t.appended; ++a) k.push_back(rng() % std::uint32_t(cells));
-    const int m = int(k.size());
-    std::vector<std::uint32_t> v(static_cast<std::size_t>(m));
-    for (int i = 0; i < m; ++i) v[std::size_t(i)] = std::uint32_t(1000000 + i);
-    std::vector<std::uint32_t> rk(k), rv(v);
-    sort_pairs(ex, rk.data(), rv.data(), m, 10);
-    const std::vector<std::uint32_t> k0(k), v0(v);
-    const bool sorted = sort_moved(ex, k.data(), v.data(), m, t.start->data(), cells);
-    if (t.sorts) {
-      EXPECT_TRUE(sorted) << t.what;
     }
-    if (sorted) {
-      EXPECT_EQ(k, rk) << t.what;
-      EXPECT_EQ(v, rv) << t.what;
-    } else {
-      EXPECT_EQ(k, k0) << t.what;
-      EXPECT_EQ(v, v0) << t.what;
-    }
-  }
 }
 
 }  // namespace

@@ -16,6 +16,7 @@ struct CpuExec {
   static constexpr MemSpace kSpace = MemSpace::Host;
   std::vector<std::uint32_t> scratch_keys, scratch_vals;  // radix sort ping-pong
   std::vector<std::uint64_t> scratch_moved;               // sort_moved's keys that moved
+  std::vector<std::vector<std::uint64_t>> scratch_parts;  // the same, a thread's part
 };
 
 // Items a thread takes at a time. The loops' items are independent (each writes its own
