@@ -192,3 +192,41 @@ TEST(SphNeighbors, SortOfMovedKeysIsTheStableSort) {
 }
 
 }  // namespace
+
+namespace {
+
+// The reach box of the fluid (stages::fluid_reach, the host's bounds in one pass): the
+// particles' least and greatest coordinates widened by the support, at 1, 2 and 3 threads.
+TEST(SphNeighbors, ReachBoxIsTheBoundsWidenedBySupport) {
+  CpuExec ex;
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(-2, 3);
+  SphParams P;
+  P.h = Real(0.1);
+  const int threads = cpu_threads();
+  for (const int n : {0, 1, 5000})
+    for (const int parts : {1, 2, 3}) {
+      std::vector<Vec3> x(static_cast<std::size_t>(n) + 1);
+      for (Vec3& p : x) p = Vec3(u(rng), u(rng), u(rng));
+      stages::FluidView f;
+      f.n = n;
+      f.x = x.data();
+      set_cpu_threads(parts);
+      stages::fluid_reach(ex, P, f);
+      set_cpu_threads(threads);
+      ASSERT_EQ(f.reached, n > 0 ? 1 : 0);
+      if (!n) continue;
+      for (int a = 0; a < 3; ++a) {
+        Real lo = x[0][a], hi = x[0][a];
+        for (int i = 0; i < n; ++i) {
+          lo = std::min(lo, x[std::size_t(i)][a]);
+          hi = std::max(hi, x[std::size_t(i)][a]);
+        }
+        const Real reach = P.h * Real(1.001);
+        EXPECT_EQ(f.reach_lo[a], lo - reach) << "n " << n << ", axis " << a;
+        EXPECT_EQ(f.reach_hi[a], hi + reach) << "n " << n << ", axis " << a;
+      }
+    }
+}
+
+}  // namespace

@@ -63,6 +63,32 @@ T reduce_max(CpuExec&, int n, T init, F f) {
   return best;
 }
 
+// lo[a] and hi[a]: the least and the greatest x[i][a] over i < n (3e38 and -3e38 for n = 0).
+template <class V, class T>
+void reduce_bounds(CpuExec&, int n, const V* x, T lo[3], T hi[3]) {
+  const T big = T(3e38);
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = big;
+    hi[a] = -big;
+  }
+#pragma omp parallel
+  {
+    T l[3] = {big, big, big}, h[3] = {-big, -big, -big};
+#pragma omp for schedule(static) nowait
+    for (int i = 0; i < n; ++i)
+      for (int a = 0; a < 3; ++a) {
+        const T v = x[i][a];
+        l[a] = v < l[a] ? v : l[a];
+        h[a] = v > h[a] ? v : h[a];
+      }
+#pragma omp critical
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = l[a] < lo[a] ? l[a] : lo[a];
+      hi[a] = h[a] > hi[a] ? h[a] : hi[a];
+    }
+  }
+}
+
 // Sum over i of f(i) in double: fixed blocks of kSumBlock terms, each summed in order, then
 // the blocks in order. The blocks do not depend on the thread count, so neither do the bits:
 // a run with 1 thread and one with 2 give the same sums (CG, DFSPH residuals, gauges).

@@ -434,9 +434,14 @@ void fluid_reach(Exec& ex, const SphParams P, FluidView& f) {
   const FluidView c = f;
   const Real big = Real(3e38);
   Real lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = -reduce_max(ex, c.n, -big, [=] SPHFEM_LAMBDA(int i) -> Real { return -c.x[i][a]; });
-    hi[a] = reduce_max(ex, c.n, -big, [=] SPHFEM_LAMBDA(int i) -> Real { return c.x[i][a]; });
+  if constexpr (Exec::kSpace == MemSpace::Host) {
+    // The six bounds in one pass over the positions (the same values: a bound is exact).
+    reduce_bounds(ex, c.n, c.x, lo, hi);
+  } else {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = -reduce_max(ex, c.n, -big, [=] SPHFEM_LAMBDA(int i) -> Real { return -c.x[i][a]; });
+      hi[a] = reduce_max(ex, c.n, -big, [=] SPHFEM_LAMBDA(int i) -> Real { return c.x[i][a]; });
+    }
   }
   const Real reach = P.h * Real(1.001);
   f.reach_lo = Vec3(lo[0] - reach, lo[1] - reach, lo[2] - reach);
