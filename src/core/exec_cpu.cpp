@@ -61,11 +61,17 @@ bool sort_moved(CpuExec& ex, std::uint32_t* keys, std::uint32_t* vals, int n,
   // A thread a part of the indices (the result does not depend on how many): it finds the
   // keys that moved, each part's in (key, index) order, then merges its kept keys with the
   // moved ones that fall between them into its own stretch of the output.
-  const int parts = std::max(1, std::min(omp_get_max_threads(), n / 1024));
+  constexpr int kMostParts = 64;
+  const int parts = std::max(1, std::min({omp_get_max_threads(), n / 1024, kMostParts}));
   if (int(ex.scratch_parts.size()) < parts) ex.scratch_parts.resize(std::size_t(parts));
   std::vector<std::uint64_t>& moved = ex.scratch_moved;
-  std::vector<std::uint64_t> first(std::size_t(parts) + 1);  // each part's first kept (key, i)
-  std::vector<std::size_t> kept(std::size_t(parts) + 1), from(std::size_t(parts) + 1);
+  std::uint64_t first[kMostParts + 1];  // each part's first kept (key, index)
+  std::size_t kept[kMostParts + 1] = {}, from[kMostParts + 1];
+  // The cell c with start[c] <= i < start[c + 1] (start is monotone, as cell_starts writes it).
+  const auto cell_of = [&](int i) {
+    return std::uint32_t(std::upper_bound(start + 1, start + cells, std::uint32_t(i)) -
+                         (start + 1));
+  };
   constexpr std::uint64_t kNone = ~std::uint64_t(0);
   bool too_many = false, nothing = false;
 #pragma omp parallel num_threads(parts)
@@ -73,10 +79,8 @@ bool sort_moved(CpuExec& ex, std::uint32_t* keys, std::uint32_t* vals, int n,
     const int p = omp_get_thread_num(), parts_run = omp_get_num_threads();
     const int lo = int(std::int64_t(n) * p / parts_run),
               hi = int(std::int64_t(n) * (p + 1) / parts_run);
-    // Where index i stood in the earlier sort: the cell c with start[c] <= i < start[c + 1],
-    // found for lo and then walked alongside i (start is monotone, as cell_starts writes it).
-    std::uint32_t c =
-        std::uint32_t(std::upper_bound(start + 1, start + cells, std::uint32_t(lo)) - (start + 1));
+    // Where index i stood in the earlier sort: cell_of(lo), then walked alongside i.
+    std::uint32_t c = cell_of(lo);
     const auto stayed = [&](int i) {
       if (std::uint32_t(i) >= start[cells]) return false;
       while (c + 1 < std::uint32_t(cells) && start[c + 1] <= std::uint32_t(i)) ++c;
@@ -142,8 +146,7 @@ bool sort_moved(CpuExec& ex, std::uint32_t* keys, std::uint32_t* vals, int n,
         vo[o++] = vals[i];
         ++m;
       };
-      c = std::uint32_t(std::upper_bound(start + 1, start + cells, std::uint32_t(lo)) -
-                        (start + 1));
+      c = cell_of(lo);
       for (int i = lo; i < hi; ++i) {
         if (!stayed(i)) continue;
         const std::uint64_t e = std::uint64_t(keys[i]) << 32 | std::uint32_t(i);

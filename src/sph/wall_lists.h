@@ -95,14 +95,6 @@ class WallLists {
     b.n_listed = n_listed_;
   }
 
-  // Bytes held (the memory estimate, scene/limits.cpp).
-  std::size_t bytes() const {
-    std::size_t s = 4 * (pool_.capacity() + listed_.capacity() + begin_.capacity() +
-                         end_.capacity() + block_first_.capacity());
-    for (const Block& B : blocks_) s += 4 * (B.samples.capacity() + B.ends.capacity());
-    return s;
-  }
-
  private:
   struct Block {
     std::vector<std::uint32_t> samples, ends;  // the block's listed samples, their lists' ends
