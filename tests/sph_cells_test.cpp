@@ -310,6 +310,60 @@ TEST(SphCells, StoredKernelFactorsGiveTheKernelsBits) {
     EXPECT_GT(listed, n / 2);
   }
 }
+// The DFSPH density pass also sums the fluid pairs of the divergence solve's warm-start sweep
+// (WarmSums::div_dv); the sweep applies that sum instead of its own pass over the pairs. The
+// velocities must be those of the pass, to the bit, for both kernels, with lists and with
+// lists that overflow (then summed over the grid).
+TEST(SphCells, DivergenceWarmStartSummedByTheDensityPassGivesTheSweepsBits) {
+  CpuExec ex;
+  ListScene scene = list_scene();
+  const int n = int(scene.x.size());
+  std::vector<Vec3> v(scene.x.size());
+  std::vector<Real> warm(scene.x.size());
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1, 1);
+  for (Vec3& vi : v) vi = Vec3(u(rng), u(rng), u(rng));
+  for (Real& k : warm) k = Real(50) * (Real(1) + u(rng));
+  for (const int kind : {0, 1})
+    for (const int cap : {0, 8}) {
+      SphParams P = scene.P;
+      P.kernel = Kernel(kind, P.h);
+      FluidBuffers fb;
+      GridView g;
+      load_sorted(fb, scene, P, v, /*dfsph=*/true, g, cap);
+      fb.warm_div.upload(warm.data(), warm.size());
+      stages::FluidView f = fb.view(n);
+      stages::WarmSums sums;
+      sums.dens_w = fb.kappa.data();
+      sums.dens_kw = fb.ksum.data();
+      sums.div_dv = fb.warm_dv.data();
+      fb.list_and_density(ex, P, f, g, stages::Walls(), /*with_alpha=*/true, sums);
+      f = fb.view(n);
+      const std::vector<Vec3> v0(f.v, f.v + n);
+      std::vector<Vec3> after[2];
+      for (const bool fused : {true, false}) {
+        fb.v.upload(v0.data(), v0.size());
+        stages::dfsph_warm_start(ex, f, /*divergence=*/true);
+        stages::dfsph_apply(ex, P, f, g, stages::Walls(), Real(1e-3),
+                            fused ? fb.warm_dv.data() : nullptr);
+        after[fused] = std::vector<Vec3>(f.v, f.v + n);
+      }
+      int listed = 0, moved = 0;
+      for (int i = 0; i < n; ++i) {
+        listed += fb.nbr_n.data()[i] > 0;
+        const Vec3 a = after[1][std::size_t(i)], b = after[0][std::size_t(i)];
+        moved += !(a.x == v0[std::size_t(i)].x);
+        ASSERT_TRUE(a.x == b.x && a.y == b.y && a.z == b.z)
+            << "kernel " << kind << ", cap " << cap << ", particle " << i;
+      }
+      EXPECT_GT(moved, n / 2);
+      if (cap)
+        EXPECT_LT(listed, n / 2);
+      else
+        EXPECT_GT(listed, n / 2);
+    }
+}
+
 // WCSPH's density pass sums W of the squared distances its list build staged (from the
 // positions' planes); without the planes it gathers x_j again. Both give each density to the
 // bit, for both kernels and with lists that overflow (then summed over the grid).

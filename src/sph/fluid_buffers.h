@@ -36,6 +36,7 @@ struct FluidBuffers {
   Buffer<int> nbr_n;
   Buffer<std::uint32_t> nbr_at;  // the host's: where each list begins (FluidView::nbr_at)
   Buffer<Real> nbr_gs;           // the host's, DFSPH: the pairs' kernel factors (FluidView::nbr_gs)
+  Buffer<Vec3> warm_dv;  // the host's, DFSPH: the divergence warm start's pairs (WarmSums::div_dv)
   int nbr_cap = 0;
   int cap = 0;                   // particles there is room for
   bool nbr_interleaved = false;  // the layout of nbr (FluidView::nbr_si, view())
@@ -80,6 +81,7 @@ struct FluidBuffers {
     packed = !nbr_interleaved && factors;
     if (packed) {
       nbr_at = Buffer<std::uint32_t>(s, cap);
+      warm_dv = Buffer<Vec3>(s, cap);
       grow_lists(std::size_t(cap) * kFirstListRoom);
     } else {
       nbr = Buffer<std::uint32_t>(s, std::size_t(cap) * std::size_t(nbr_cap));

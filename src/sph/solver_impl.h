@@ -125,11 +125,12 @@ class SolverT final : public FluidSolver {
     }
     // Under DFSPH the density pass also takes the fluid pairs' sums of the density solve's
     // warm-start filter (stages::WarmSums), into kappa and kappa_sum, free until the divergence
-    // solve.
+    // solve, and on the host those of the divergence solve's warm-start sweep.
     stages::WarmSums warm;
     if (dfsph) {
       warm.dens_w = fluid_.kappa.data();
       warm.dens_kw = fluid_.ksum.data();
+      if (fluid_.packed) warm.div_dv = fluid_.warm_dv.data();
     }
     fluid_.list_and_density(ex_, P_, f, g, w, dfsph, warm);
     if (dfsph) {
@@ -487,8 +488,9 @@ class SolverT final : public FluidSolver {
       stages::wall_accumulate(ex_, b);
       if (mb.n) stages::wall_accumulate(ex_, mb);
     };
-    // The warm start; the density solve's fluid pairs were summed with the forces.
-    apply(divergence ? nullptr : fluid_.tmp3.data());
+    // The warm start: its fluid pairs were summed by the density pass (divergence, on the
+    // host) or with the forces (density). One pass over the pairs fewer a step.
+    apply(divergence ? (fluid_.packed ? fluid_.warm_dv.data() : nullptr) : fluid_.tmp3.data());
     const int samples = n_ + active_walls_;
     int it = 0;
     last_error_ = 0;

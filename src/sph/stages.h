@@ -458,6 +458,16 @@ SPHFEM_HD_INLINE auto dfsph_pair_term(const SphParams& P, const Real* kappa, Rea
   return grad * (P.volume * (ki + at(kappa, j)));
 }
 
+// The fluid pairs' sum of dfsph_pair_term for particle i at xi with stiffness kappa.
+SPHFEM_HD_INLINE Vec3 dfsph_fluid_dv(const SphParams& P, const FluidView& f, const GridView& g,
+                                     const Real* kappa, int i, const Vec3& xi) {
+  const Real ki = kappa[i];
+  return sum_fluid_pairs<false, Vec3>(
+      f, g, P.kernel, i, xi, P.h2,
+      [&](const auto& j, const auto&, const auto&, const auto&, const auto& gw)
+          SPHFEM_TERM { return dfsph_pair_term(P, kappa, ki, j, gw); });
+}
+
 // Density (and the DFSPH factor): rho_i = m sum_j W_ij + sum_b psi_b W_ib. WCSPH also sets
 // the pressure from the state equation; DFSPH leaves p to its pressure solve.
 //
@@ -469,9 +479,14 @@ SPHFEM_HD_INLINE auto dfsph_pair_term(const SphParams& P, const Real* kappa, Rea
 // DFSPH (with_alpha) also takes the fluid pairs' sums of the density solve's warm-start filter,
 // sum_j W_ij and sum_j W_ij warm_dens_j, into warm (dfsph_smooth_warm's fluid_w, fluid_kw): the
 // filter has no loop over the pairs of its own.
+//
+// div_dv (DFSPH, or nullptr): also the fluid pairs of the divergence solve's warm-start sweep,
+// sum_j V (w_i + w_j) grad W_ij with w = warm_div (dfsph_apply's term, the same bits), for that
+// sweep to apply instead of a pass over the pairs of its own.
 struct WarmSums {
   Real* dens_w = nullptr;
   Real* dens_kw = nullptr;
+  Vec3* div_dv = nullptr;
 };
 
 // The most list entries (nbr_cap and its padding) whose squared distances density_at stages.
@@ -512,12 +527,33 @@ SPHFEM_HD_INLINE void density_at(const SphParams& P, const FluidView& f, const G
   if (f.nbr) f.nbr_n[i] = kept ? count : -1;
   for (int k = count; k < end; ++k) list[k] = std::uint32_t(i);
   if (with_alpha) {
-    const auto t = sum_fluid_pairs<true, Both<Both<Real, Both<Vec3, Real>>, Real>, true>(
-        f, g, P.kernel, i, xi, P.h2,
-        [&](const auto& j, const auto&, const auto&, const auto& wk, const auto& grad) SPHFEM_TERM {
-          const auto gw = grad * P.volume;
-          return both(both(wk, both(gw, norm2(gw))), wk * at(f.warm_dens, j));
-        });
+    // W, V grad W and its square, and the warm-start filter's W warm_dens_j.
+    auto pair = [&](const auto& j, const auto& wk, const auto& grad) SPHFEM_TERM {
+      const auto gw = grad * P.volume;
+      return both(both(wk, both(gw, norm2(gw))), wk * at(f.warm_dens, j));
+    };
+    using Sums = Both<Both<Real, Both<Vec3, Real>>, Real>;
+    Sums t;
+    // Summed with the rest only in the host's lanes, whose sums are the sweep's to the bit; a
+    // pair at a time the sweep's own sum (g++ contracts the two into fused multiply-adds in
+    // different places).
+    if (warm.div_dv && SPHFEM_PAIR_LANES && kept) {
+      const Real wi = f.warm_div[i];
+      const auto td = sum_fluid_pairs<true, Both<Sums, Vec3>, true>(
+          f, g, P.kernel, i, xi, P.h2,
+          [&](const auto& j, const auto&, const auto&, const auto& wk, const auto& grad)
+              SPHFEM_TERM {
+                return both(pair(j, wk, grad), dfsph_pair_term(P, f.warm_div, wi, j, grad));
+              });
+      t = td.a;
+      warm.div_dv[i] = td.b;
+    } else {
+      t = sum_fluid_pairs<true, Sums, true>(
+          f, g, P.kernel, i, xi, P.h2,
+          [&](const auto& j, const auto&, const auto&, const auto& wk, const auto& grad)
+              SPHFEM_TERM { return pair(j, wk, grad); });
+      if (warm.div_dv) warm.div_dv[i] = dfsph_fluid_dv(P, f, g, f.warm_div, i, xi);
+    }
     const auto& s = t.a;
     warm.dens_w[i] = s.a;
     warm.dens_kw[i] = t.b;
@@ -1189,12 +1225,7 @@ void dfsph_apply(Exec& ex, const SphParams P, FluidView f, const GridView g, con
   parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 xi = f.x[i];
     const Real ki = f.kappa[i];
-    Vec3 dv = fluid_dv
-                  ? fluid_dv[i]
-                  : sum_fluid_pairs<false, Vec3>(
-                        f, g, P.kernel, i, xi, P.h2,
-                        [&](const auto& j, const auto&, const auto&, const auto&, const auto& gw)
-                            SPHFEM_TERM { return dfsph_pair_term(P, f.kappa, ki, j, gw); });
+    Vec3 dv = fluid_dv ? fluid_dv[i] : dfsph_fluid_dv(P, f, g, f.kappa, i, xi);
     for_wall_samples(f, i, w, xi, P.h2,
                      [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                        const Real k = dfsph_wall_pair(P, b, j, ki, b.kappa[j]);
