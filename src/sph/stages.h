@@ -127,18 +127,20 @@ SPHFEM_HD Both<A, B> both(const A& a, const B& b) {
 }
 
 #if SPHFEM_PAIR_LANES
-// Both in the host's lanes (lanes::sum_pairs): its parts summed and reduced alike.
+// Both in the host's lanes (lanes::sum_pairs): its parts summed and reduced alike. Inlined
+// like the lanes' own operators: g++ left the reduction of the density pass's sums as a call
+// that took its vectors through memory.
 template <class A, class B>
-Both<A, B> operator+(const Both<A, B>& x, const Both<A, B>& y) {
+SPHFEM_LANE Both<A, B> operator+(const Both<A, B>& x, const Both<A, B>& y) {
   return {x.a + y.a, x.b + y.b};
 }
 template <class A, class B>
-auto total(const Both<A, B>& x) {
+SPHFEM_LANE auto total(const Both<A, B>& x) {
   using lanes::total;
   return both(total(x.a), total(x.b));
 }
 template <class A, class B>
-Both<A, B> select(lanes::I8 m, const Both<A, B>& x, const Both<A, B>& y) {
+SPHFEM_LANE Both<A, B> select(lanes::I8 m, const Both<A, B>& x, const Both<A, B>& y) {
   using lanes::select;
   return {select(m, x.a, y.a), select(m, x.b, y.b)};
 }
