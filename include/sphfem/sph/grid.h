@@ -135,13 +135,23 @@ inline int collect_from_planes(const GridView& g, const Vec3& xi, Real h2, std::
   std::uint32_t from[9 * kRowGroups], to[9 * kRowGroups];
   int groups = 0;
   bool long_row = false;
-  for (int z = c.z0; z <= c.z1; ++z)
-    for (int y = c.y0; y <= c.y1; ++y) {
-      int first = 0, end_cell = -1;
-      const bool reached = c.row(y, z, first, end_cell);
-      const int row = (z * g.ny + y) * g.nx;
-      const std::uint32_t b = g.start[row + first];
-      const std::uint32_t e = reached ? g.start[row + end_cell + 1] : b;
+  // The 3 x 3 rows of CellRows::row, z outer and y inner as there, without a branch: a row
+  // beyond the grid's edge lies at an infinite distance (and reads its neighbour's starts), one
+  // out of reach holds no group. The branches of the loops and of row() were mispredicted
+  // several times a particle.
+  const Real far = Real(3e38);
+  const Real gy[3] = {c.iy > 0 ? c.gap_lo[1] : far, Real(0), c.iy < g.ny - 1 ? c.gap_hi[1] : far};
+  const Real gz[3] = {c.iz > 0 ? c.gap_lo[2] : far, Real(0), c.iz < g.nz - 1 ? c.gap_hi[2] : far};
+  const int ys[3] = {c.y0, c.iy, c.y1}, zs[3] = {c.z0, c.iz, c.z1};
+  for (int dz = 0; dz < 3; ++dz)
+    for (int dy = 0; dy < 3; ++dy) {
+      const Real yz = gy[dy] + gz[dz];
+      const int row = (zs[dz] * g.ny + ys[dy]) * g.nx;
+      const int first = yz + c.gap_lo[0] < c.reach2 ? c.x0 : c.ix;
+      const int last = yz + c.gap_hi[0] < c.reach2 ? c.x1 : c.ix;
+      const std::uint32_t b = g.start[row + first], end = g.start[row + last + 1];
+      const std::uint32_t in_reach = 0u - std::uint32_t(yz < c.reach2);  // g++ branched on ?:
+      const std::uint32_t e = b + ((end - b) & in_reach);
       const int n = int((e - b + 7) >> 3);
       long_row |= n > kRowGroups;
       for (int k = 0; k < kRowGroups; ++k) {
