@@ -69,16 +69,26 @@ struct CellRows {
     }
     reach2 = h2 * g.inv_cell * g.inv_cell;
   }
-  SPHFEM_HD Real gap2(int a, int c, int own) const {
-    return c < own ? gap_lo[a] : (c > own ? gap_hi[a] : Real(0));
-  }
-  // The range [first, last] of row (y, z) within reach; false when none of it is.
-  SPHFEM_HD bool row(int y, int z, int& first, int& last) const {
-    const Real yz = gap2(1, y, iy) + gap2(2, z, iz);
-    if (!(yz < reach2)) return false;
-    first = x0 < ix && !(yz + gap_lo[0] < reach2) ? ix : x0;
-    last = x1 > ix && !(yz + gap_hi[0] < reach2) ? ix : x1;
-    return true;
+  // f(b, e) for the index range [b, e) of each of the 3 x 3 rows in the grid's order (z outer,
+  // y inner), trimmed to the cells within reach of xi, empty where none is. Without a branch:
+  // a row beyond the grid's edge lies at an infinite distance (and reads its neighbour's
+  // starts); the branches of the row loops were mispredicted several times a query.
+  template <class F>
+  SPHFEM_HD_INLINE void for_rows(const GridView& g, F&& f) const {
+    const Real far = Real(3e38);
+    const Real gy[3] = {iy > 0 ? gap_lo[1] : far, Real(0), iy < g.ny - 1 ? gap_hi[1] : far};
+    const Real gz[3] = {iz > 0 ? gap_lo[2] : far, Real(0), iz < g.nz - 1 ? gap_hi[2] : far};
+    const int ys[3] = {y0, iy, y1}, zs[3] = {z0, iz, z1};
+    for (int dz = 0; dz < 3; ++dz)
+      for (int dy = 0; dy < 3; ++dy) {
+        const Real yz = gy[dy] + gz[dz];
+        const int row = (zs[dz] * g.ny + ys[dy]) * g.nx;
+        const int first = yz + gap_lo[0] < reach2 ? x0 : ix;
+        const int last = yz + gap_hi[0] < reach2 ? x1 : ix;
+        const std::uint32_t lo = g.start[row + first], hi = g.start[row + last + 1];
+        const std::uint32_t in_reach = 0u - std::uint32_t(yz < reach2);  // g++ branched on ?:
+        f(lo, lo + ((hi - lo) & in_reach));
+      }
   }
 };
 
@@ -87,19 +97,13 @@ struct CellRows {
 template <class F>
 SPHFEM_HD void for_neighbors(const GridView& g, const Vec3* xs, const Vec3& xi, Real h2, F&& f) {
   if (g.nx == 0) return;
-  const CellRows c(g, xi, h2);
-  for (int z = c.z0; z <= c.z1; ++z)
-    for (int y = c.y0; y <= c.y1; ++y) {
-      int first, last;
-      if (!c.row(y, z, first, last)) continue;
-      const int row = (z * g.ny + y) * g.nx;
-      const std::uint32_t end = g.start[row + last + 1];
-      for (std::uint32_t j = g.start[row + first]; j < end; ++j) {
-        const Vec3 rij = xi - xs[j];
-        const Real r2 = norm2(rij);
-        if (r2 < h2) f(j, rij, r2);
-      }
+  CellRows(g, xi, h2).for_rows(g, [&](std::uint32_t b, std::uint32_t e) {
+    for (std::uint32_t j = b; j < e; ++j) {
+      const Vec3 rij = xi - xs[j];
+      const Real r2 = norm2(rij);
+      if (r2 < h2) f(j, rij, r2);
     }
+  });
 }
 
 #if SPHFEM_GRID_PACK
@@ -135,31 +139,15 @@ inline int collect_from_planes(const GridView& g, const Vec3& xi, Real h2, std::
   std::uint32_t from[9 * kRowGroups], to[9 * kRowGroups];
   int groups = 0;
   bool long_row = false;
-  // The 3 x 3 rows of CellRows::row, z outer and y inner as there, without a branch: a row
-  // beyond the grid's edge lies at an infinite distance (and reads its neighbour's starts), one
-  // out of reach holds no group. The branches of the loops and of row() were mispredicted
-  // several times a particle.
-  const Real far = Real(3e38);
-  const Real gy[3] = {c.iy > 0 ? c.gap_lo[1] : far, Real(0), c.iy < g.ny - 1 ? c.gap_hi[1] : far};
-  const Real gz[3] = {c.iz > 0 ? c.gap_lo[2] : far, Real(0), c.iz < g.nz - 1 ? c.gap_hi[2] : far};
-  const int ys[3] = {c.y0, c.iy, c.y1}, zs[3] = {c.z0, c.iz, c.z1};
-  for (int dz = 0; dz < 3; ++dz)
-    for (int dy = 0; dy < 3; ++dy) {
-      const Real yz = gy[dy] + gz[dz];
-      const int row = (zs[dz] * g.ny + ys[dy]) * g.nx;
-      const int first = yz + c.gap_lo[0] < c.reach2 ? c.x0 : c.ix;
-      const int last = yz + c.gap_hi[0] < c.reach2 ? c.x1 : c.ix;
-      const std::uint32_t b = g.start[row + first], end = g.start[row + last + 1];
-      const std::uint32_t in_reach = 0u - std::uint32_t(yz < c.reach2);  // g++ branched on ?:
-      const std::uint32_t e = b + ((end - b) & in_reach);
-      const int n = int((e - b + 7) >> 3);
-      long_row |= n > kRowGroups;
-      for (int k = 0; k < kRowGroups; ++k) {
-        from[groups + k] = b + 8 * std::uint32_t(k);
-        to[groups + k] = e;
-      }
-      groups += n < kRowGroups ? n : kRowGroups;
+  c.for_rows(g, [&](std::uint32_t b, std::uint32_t e) {
+    const int n = int((e - b + 7) >> 3);
+    long_row |= n > kRowGroups;
+    for (int k = 0; k < kRowGroups; ++k) {
+      from[groups + k] = b + 8 * std::uint32_t(k);
+      to[groups + k] = e;
     }
+    groups += n < kRowGroups ? n : kRowGroups;
+  });
   const __m256 lim = _mm256_set1_ps(h2);
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const F8 cx = F8(_mm256_set1_ps(xi.x)), cy = F8(_mm256_set1_ps(xi.y)),
@@ -196,14 +184,9 @@ inline int collect_from_planes(const GridView& g, const Vec3& xi, Real h2, std::
   }
   // A crowded row (rare): row by row, the scan's own row loop written out again; behind a
   // callback shared with for_neighbors the fast path above became 1.18x slower (g++ 12).
-  for (int z = c.z0; z <= c.z1; ++z)
-    for (int y = c.y0; y <= c.y1; ++y) {
-      int first, end_cell;
-      if (!c.row(y, z, first, end_cell)) continue;
-      const int row = (z * g.ny + y) * g.nx;
-      const std::uint32_t end = g.start[row + end_cell + 1];
-      for (std::uint32_t j0 = g.start[row + first]; j0 < end; j0 += 8) scan(j0, end);
-    }
+  c.for_rows(g, [&](std::uint32_t b, std::uint32_t e) {
+    for (std::uint32_t j0 = b; j0 < e; j0 += 8) scan(j0, e);
+  });
   return count;
 }
 #endif
@@ -230,75 +213,69 @@ SPHFEM_HD int collect_neighbors(const GridView& g, const Vec3* xs, const Vec3& x
   if (planes && step == 1)
     return collect_from_planes(g, xi, h2, list, last, count, planes, stride, dist2);
 #endif
-  const CellRows c(g, xi, h2);
-  for (int z = c.z0; z <= c.z1; ++z)
-    for (int y = c.y0; y <= c.y1; ++y) {
-      int first, end_cell;
-      if (!c.row(y, z, first, end_cell)) continue;
-      const int row = (z * g.ny + y) * g.nx;
-      const std::uint32_t end = g.start[row + end_cell + 1];
+  CellRows(g, xi, h2).for_rows(g, [&](std::uint32_t first, std::uint32_t end) {
 #if defined(__CUDA_ARCH__)
-      for (std::uint32_t j = g.start[row + first]; j < end; ++j) {
-        const bool hit = norm2(xi - xs[j]) < h2;
-        if (hit) list[std::size_t(count < last ? count : last) * step] = j;
-        count += hit ? 1 : 0;
-      }
-#else
-      constexpr int kChunk = 32;
-      for (std::uint32_t j0 = g.start[row + first]; j0 < end; j0 += kChunk) {
-        const int m = end - j0 < std::uint32_t(kChunk) ? int(end - j0) : kChunk;
-        // The positions as the floats they are (Vec3 is three Reals, no padding): g++ does not
-        // vectorise member reads of a struct array.
-        static_assert(sizeof(Vec3) == 3 * sizeof(Real), "Vec3 read as three Reals");
-        Real r2[kChunk];
-        if (planes) {
-          const Real *px = planes + j0, *py = px + stride, *pz = py + stride;
-#pragma omp simd
-          for (int k = 0; k < m; ++k) {
-            const Real dx = xi.x - px[k], dy = xi.y - py[k], dz = xi.z - pz[k];
-            r2[k] = dx * dx + dy * dy + dz * dz;
-          }
-        } else {
-          const Real* x = &xs[j0].x;
-#pragma omp simd
-          for (int k = 0; k < m; ++k) {
-            const Real dx = xi.x - x[3 * k], dy = xi.y - x[3 * k + 1], dz = xi.z - x[3 * k + 2];
-            r2[k] = dx * dx + dy * dy + dz * dz;
-          }
-        }
-        if (step == 1 && count + m <= last) {
-          int k = 0;
-#if SPHFEM_GRID_PACK
-          // Eight candidates a time: the hits' indices packed to the front of one vector and
-          // stored whole (the slots past the hits are overwritten later or unused; they stay
-          // below count + m <= last), the count advanced by the hits.
-          const __m256 lim = _mm256_set1_ps(h2);
-          __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(int(j0)),
-                                         _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-          for (; k + 8 <= m; k += 8) {
-            const int hits =
-                _mm256_movemask_ps(_mm256_cmp_ps(_mm256_loadu_ps(r2 + k), lim, _CMP_LT_OQ));
-            const __m256i to_front = _mm256_cvtepu8_epi32(
-                _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kPackHits[hits])));
-            _mm256_storeu_si256(reinterpret_cast<__m256i*>(list + count),
-                                _mm256_permutevar8x32_epi32(idx, to_front));
-            count += __builtin_popcount(unsigned(hits));
-            idx = _mm256_add_epi32(idx, _mm256_set1_epi32(8));
-          }
-#endif
-          for (; k < m; ++k) {
-            list[count] = j0 + std::uint32_t(k);
-            count += r2[k] < h2 ? 1 : 0;
-          }
-        } else {
-          for (int k = 0; k < m; ++k) {
-            list[std::size_t(count < last ? count : last) * step] = j0 + std::uint32_t(k);
-            count += r2[k] < h2 ? 1 : 0;
-          }
-        }
-      }
-#endif
+    for (std::uint32_t j = first; j < end; ++j) {
+      const bool hit = norm2(xi - xs[j]) < h2;
+      if (hit) list[std::size_t(count < last ? count : last) * step] = j;
+      count += hit ? 1 : 0;
     }
+#else
+    constexpr int kChunk = 32;
+    for (std::uint32_t j0 = first; j0 < end; j0 += kChunk) {
+      const int m = end - j0 < std::uint32_t(kChunk) ? int(end - j0) : kChunk;
+      // The positions as the floats they are (Vec3 is three Reals, no padding): g++ does not
+      // vectorise member reads of a struct array.
+      static_assert(sizeof(Vec3) == 3 * sizeof(Real), "Vec3 read as three Reals");
+      Real r2[kChunk];
+      if (planes) {
+        const Real *px = planes + j0, *py = px + stride, *pz = py + stride;
+#pragma omp simd
+        for (int k = 0; k < m; ++k) {
+          const Real dx = xi.x - px[k], dy = xi.y - py[k], dz = xi.z - pz[k];
+          r2[k] = dx * dx + dy * dy + dz * dz;
+        }
+      } else {
+        const Real* x = &xs[j0].x;
+#pragma omp simd
+        for (int k = 0; k < m; ++k) {
+          const Real dx = xi.x - x[3 * k], dy = xi.y - x[3 * k + 1], dz = xi.z - x[3 * k + 2];
+          r2[k] = dx * dx + dy * dy + dz * dz;
+        }
+      }
+      if (step == 1 && count + m <= last) {
+        int k = 0;
+#if SPHFEM_GRID_PACK
+        // Eight candidates a time: the hits' indices packed to the front of one vector and
+        // stored whole (the slots past the hits are overwritten later or unused; they stay
+        // below count + m <= last), the count advanced by the hits.
+        const __m256 lim = _mm256_set1_ps(h2);
+        __m256i idx =
+            _mm256_add_epi32(_mm256_set1_epi32(int(j0)), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        for (; k + 8 <= m; k += 8) {
+          const int hits =
+              _mm256_movemask_ps(_mm256_cmp_ps(_mm256_loadu_ps(r2 + k), lim, _CMP_LT_OQ));
+          const __m256i to_front = _mm256_cvtepu8_epi32(
+              _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kPackHits[hits])));
+          _mm256_storeu_si256(reinterpret_cast<__m256i*>(list + count),
+                              _mm256_permutevar8x32_epi32(idx, to_front));
+          count += __builtin_popcount(unsigned(hits));
+          idx = _mm256_add_epi32(idx, _mm256_set1_epi32(8));
+        }
+#endif
+        for (; k < m; ++k) {
+          list[count] = j0 + std::uint32_t(k);
+          count += r2[k] < h2 ? 1 : 0;
+        }
+      } else {
+        for (int k = 0; k < m; ++k) {
+          list[std::size_t(count < last ? count : last) * step] = j0 + std::uint32_t(k);
+          count += r2[k] < h2 ? 1 : 0;
+        }
+      }
+    }
+#endif
+  });
   return count;
 }
 
