@@ -117,6 +117,33 @@ void load_sorted(FluidBuffers& fb, const ListScene& s, const SphParams& P,
   g.start = fb.start.data();
 }
 
+// Wall samples in set: three layers under the scene's block and one far above it (1,764, two
+// blocks of kSumBlock), with psi = m and their rest density; returns their number.
+int sample_layers(SampleSet<CpuExec>& set, const ListScene& scene, const SphParams& P) {
+  CpuExec ex;
+  std::vector<Vec3> xs;
+  for (const Real y : {Real(0.05), Real(0.1), Real(0.15), Real(0.85)})
+    for (int a = 0; a < 21; ++a)
+      for (int c = 0; c < 21; ++c)
+        xs.push_back(Vec3(Real(0.05) * Real(a + 1), y, Real(0.05) * Real(c + 1)));
+  const int nb = int(xs.size());
+  GridView geometry = scene.g;
+  geometry.start = nullptr;
+  set.resize(nb, geometry);
+  Buffer<Vec3> x(MemSpace::Host, std::size_t(nb));
+  Buffer<std::uint32_t> keys(MemSpace::Host, std::size_t(nb)),
+      perm(MemSpace::Host, std::size_t(nb));
+  x.upload(xs.data(), std::size_t(nb));
+  stages::cell_keys(ex, set.grid(), x.data(), keys.data(), perm.data(), nb);
+  sort_pairs(ex, keys.data(), perm.data(), nb, 11);
+  stages::gather(ex, x.data(), set.x.data(), perm.data(), nb);
+  stages::cell_starts(ex, keys.data(), set.start.data(), nb, set.grid().cells());
+  std::vector<Real> psi(std::size_t(nb), P.mass);
+  set.psi.upload(psi.data(), std::size_t(nb));
+  stages::wall_rest(ex, P, set.rest.data(), set.nb_rest.data(), set.view(nb));
+  return nb;
+}
+
 // density() stores each particle's fluid neighbours; for_fluid_neighbors and for_fluid_pairs
 // (with the kernel's values) must give them back in the grid's order, in every layout (the
 // host's, packed or not, and a device's), and they must be the brute-force neighbour set.
@@ -410,34 +437,12 @@ TEST(SphCells, ListedWallSamplesGiveTheScansBits) {
   ListScene scene = list_scene();
   const SphParams& P = scene.P;
   const int n = int(scene.x.size());
-  std::vector<Vec3> v(static_cast<std::size_t>(n)), xs;
+  std::vector<Vec3> v(static_cast<std::size_t>(n));
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-1, 1);
   for (Vec3& vi : v) vi = Vec3(u(rng), u(rng), u(rng));
-  // Three layers under the block and one far above it: 1,764 samples, two of kSumBlock.
-  for (const Real y : {Real(0.05), Real(0.1), Real(0.15), Real(0.85)})
-    for (int a = 0; a < 21; ++a)
-      for (int c = 0; c < 21; ++c)
-        xs.push_back(Vec3(Real(0.05) * Real(a + 1), y, Real(0.05) * Real(c + 1)));
-  const int nb = int(xs.size());
-  ASSERT_GT(nb, kSumBlock);
   SampleSet<CpuExec> set;
-  GridView geometry = scene.g;
-  geometry.start = nullptr;
-  set.resize(nb, geometry);
-  {
-    Buffer<Vec3> x(MemSpace::Host, std::size_t(nb));
-    Buffer<std::uint32_t> keys(MemSpace::Host, std::size_t(nb)),
-        perm(MemSpace::Host, std::size_t(nb));
-    x.upload(xs.data(), std::size_t(nb));
-    stages::cell_keys(ex, set.grid(), x.data(), keys.data(), perm.data(), nb);
-    sort_pairs(ex, keys.data(), perm.data(), nb, 11);
-    stages::gather(ex, x.data(), set.x.data(), perm.data(), nb);
-    stages::cell_starts(ex, keys.data(), set.start.data(), nb, set.grid().cells());
-    std::vector<Real> psi(std::size_t(nb), P.mass);
-    set.psi.upload(psi.data(), std::size_t(nb));
-  }
-  stages::wall_rest(ex, P, set.rest.data(), set.nb_rest.data(), set.view(nb));
+  const int nb = sample_layers(set, scene, P);
   FluidBuffers fb;
   GridView g;
   load_sorted(fb, scene, P, v, /*dfsph=*/true, g);
@@ -499,6 +504,53 @@ TEST(SphCells, ListedWallSamplesGiveTheScansBits) {
   stages::BoundaryView without = set.view(nb);
   lists.attach(without);
   EXPECT_EQ(without.listed, nullptr);
+}
+
+// DFSPH's residual sweep reads the kernel factors of the tank's samples a particle listed
+// where the density pass stored them beside the fluid's (stages::for_wall_grads): each
+// residual and stiffness must be what the kernel evaluated again gives, to the bit, for both
+// kernels and both solves.
+TEST(SphCells, StoredTankFactorsGiveTheKernelsBits) {
+  CpuExec ex;
+  ListScene scene = list_scene();
+  const int n = int(scene.x.size());
+  std::vector<Vec3> v(scene.x.size());
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(-1, 1);
+  for (Vec3& vi : v) vi = Vec3(u(rng), u(rng), u(rng));
+  for (const int kind : {0, 1}) {
+    SphParams P = scene.P;
+    P.kernel = Kernel(kind, P.h);
+    SampleSet<CpuExec> set;
+    const int nb = sample_layers(set, scene, P);
+    FluidBuffers fb;
+    GridView g;
+    load_sorted(fb, scene, P, v, /*dfsph=*/true, g);
+    stages::FluidView f = fb.view(n);
+    stages::WarmSums warm;
+    warm.dens_w = fb.kappa.data();
+    warm.dens_kw = fb.ksum.data();
+    stages::Walls w;
+    w.fixed = set.view(nb);
+    fb.list_and_density(ex, P, f, g, w, /*with_alpha=*/true, warm);
+    f = fb.view(n);
+    fb.ksum.zero();
+    int listed = 0;
+    for (int i = 0; i < n; ++i) listed += (fb.flags.data()[i] >> stages::kTankListed) > 1;
+    EXPECT_GT(listed, 50);
+    stages::FluidView fresh = f;
+    fresh.nbr_gs = nullptr;
+    for (const bool divergence : {true, false}) {
+      const double a = stages::dfsph_source(ex, P, f, g, w, Real(1e-3), Real(0.5), divergence);
+      const std::vector<Real> ka(fb.kappa.data(), fb.kappa.data() + n);
+      const double b = stages::dfsph_source(ex, P, fresh, g, w, Real(1e-3), Real(0.5), divergence);
+      EXPECT_NE(a, 0.0);
+      EXPECT_EQ(a, b) << "kernel " << kind << (divergence ? ", divergence" : ", density");
+      for (int i = 0; i < n; ++i)
+        ASSERT_EQ(ka[std::size_t(i)], fb.kappa.data()[i])
+            << "kernel " << kind << ", particle " << i;
+    }
+  }
 }
 
 TEST(SphCells, OverflowingListsFallBackToTheGridInEveryLayout) {

@@ -320,6 +320,38 @@ SPHFEM_HD void for_wall_samples(const FluidView& fl, int i, const Walls& w, cons
   for_wall_samples(fl, i, fl.flags ? fl.flags[i] : kNearTank, w, xi, h2, f);
 }
 
+// f(b, j, grad) for the wall samples of for_wall_samples, in its order, grad() giving grad W_ij.
+// The tank's samples density() listed with their kernel factors (DFSPH on the host) take it
+// from there, rij times the factor: Kernel::grad's bits, without its square root and
+// polynomial in each of the step's six residual sweeps (dfsph_source). dfsph_apply keeps
+// evaluating the kernel: with the stored factors its velocities came out differently rounded
+// (not found why; the factors themselves are equal to the bit).
+template <class F>
+SPHFEM_HD void for_wall_grads(const FluidView& fl, int i, const Walls& w, const Vec3& xi,
+                              const Kernel& K, Real h2, F&& f) {
+  const int flags = fl.flags ? fl.flags[i] : kNearTank;
+  const int listed = flags >> kTankListed;
+  auto computed = [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
+    f(b, j, [&] { return K.grad(r, std::sqrt(r2)); });
+  };
+  if (listed > 0 && fl.nbr_gs) {
+    const std::size_t at = list_start(fl, i);
+    const std::uint32_t* list = fl.nbr + at;
+    const Real* gs = fl.nbr_gs + at;
+    const int first = listed_end(fl, fl.nbr_n[i]);
+    for (int k = first; k < first + listed - 1; ++k) {
+      const std::uint32_t j = list[k];
+      const Vec3 rij = xi - w.fixed.x[j];
+      const Real s = gs[k];
+      f(w.fixed, j, [&] { return rij * s; });
+    }
+    for_neighbors(w.moving.grid, w.moving.x, xi, h2,
+                  [&](std::uint32_t j, const Vec3& r, Real r2) { computed(w.moving, j, r, r2); });
+    return;
+  }
+  for_wall_samples(fl, i, flags, w, xi, h2, computed);
+}
+
 // Velocity of particle i relative to wall sample j.
 SPHFEM_HD Vec3 relative_to(const BoundaryView& b, std::uint32_t j, const Vec3& vi) {
   return b.v ? vi - b.v[j] : vi;
@@ -582,17 +614,24 @@ SPHFEM_HD_INLINE void density_at(const SphParams& P, const FluidView& f, const G
     listed = filled <= last ? 1 + filled - end : 0;
   }
   int tank = 0;
+  // DFSPH on the host: the listed tank samples' gradient factors beside them, as the fluid
+  // pairs' (for_wall_grads).
+  Real* tank_gs =
+      with_alpha && listed > 0 && f.nbr_gs ? f.nbr_gs + list_start(f, i) + end : nullptr;
   for_wall_samples(f, i, (listed << kTankListed) | near, w, xi, P.h2,
                    [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
                      const Real rr = std::sqrt(r2);
                      rho += b.psi[j] * P.kernel.W(rr);
                      ++walls;
-                     tank += &b == &w.fixed ? 1 : 0;
+                     const bool fixed = &b == &w.fixed;
                      if (with_alpha) {
-                       const Vec3 gw = P.kernel.grad(r, rr);
+                       const Real gs = P.kernel.gscale(rr);
+                       if (tank_gs && fixed) tank_gs[tank] = gs;
+                       const Vec3 gw = r * gs;  // Kernel::grad
                        gwall += gw * (b.psi[j] / P.rho0);
                        gwall_v += gw * P.volume;
                      }
+                     tank += fixed ? 1 : 0;
                    });
   NearSurface s;
   if (near_surface(w.surface, i, s)) {
@@ -992,10 +1031,10 @@ double dfsph_source(Exec& ex, const SphParams P, FluidView f, const GridView g, 
         f, g, P.kernel, i, xi, P.h2,
         [&](const auto& j, const auto&, const auto&, const auto&, const auto& gw)
             SPHFEM_TERM { return P.volume * dot(vi - at(f.v, j), gw); });
-    for_wall_samples(
-        f, i, w, xi, P.h2, [&](const BoundaryView& b, std::uint32_t j, const Vec3& r, Real r2) {
-          d += (b.psi[j] / P.rho0) * dot(relative_to(b, j, vi), P.kernel.grad(r, std::sqrt(r2)));
-        });
+    for_wall_grads(f, i, w, xi, P.kernel, P.h2,
+                   [&](const BoundaryView& b, std::uint32_t j, const auto& grad) {
+                     d += (b.psi[j] / P.rho0) * dot(relative_to(b, j, vi), grad());
+                   });
     NearSurface s;
     if (near_surface(w.surface, i, s)) d -= s.slope * dot(vi - s.vs, s.n);
     Real err = divergence ? d * dt : (f.rho[i] / P.rho0 - Real(1)) * pos_rate + dt * d;
