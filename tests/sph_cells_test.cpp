@@ -144,6 +144,31 @@ int sample_layers(SampleSet<CpuExec>& set, const ListScene& scene, const SphPara
   return nb;
 }
 
+// n velocities of random directions and sizes, from seed.
+std::vector<Vec3> random_velocities(std::size_t n, unsigned seed) {
+  std::vector<Vec3> v(n);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1, 1);
+  for (Vec3& vi : v) vi = Vec3(u(rng), u(rng), u(rng));
+  return v;
+}
+
+// The scene in fb at velocities v as DFSPH's density pass leaves it with walls w: sorted into g,
+// its lists and kernel factors stored, the warm-start filter's sums in kappa and ksum. Returns
+// the view after the pass.
+stages::FluidView dfsph_density(FluidBuffers& fb, const ListScene& s, const SphParams& P,
+                                const std::vector<Vec3>& v, const stages::Walls& w, GridView& g) {
+  CpuExec ex;
+  load_sorted(fb, s, P, v, /*dfsph=*/true, g);
+  const int n = int(s.x.size());
+  stages::FluidView f = fb.view(n);
+  stages::WarmSums warm;
+  warm.dens_w = fb.kappa.data();
+  warm.dens_kw = fb.ksum.data();
+  fb.list_and_density(ex, P, f, g, w, /*with_alpha=*/true, warm);
+  return fb.view(n);
+}
+
 // density() stores each particle's fluid neighbours; for_fluid_neighbors and for_fluid_pairs
 // (with the kernel's values) must give them back in the grid's order, in every layout (the
 // host's, packed or not, and a device's), and they must be the brute-force neighbour set.
@@ -297,23 +322,14 @@ TEST(SphCells, StoredKernelFactorsGiveTheKernelsBits) {
   CpuExec ex;
   ListScene scene = list_scene();
   const int n = int(scene.x.size());
-  std::vector<Vec3> v(scene.x.size());
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<float> u(-1, 1);
-  for (Vec3& vi : v) vi = Vec3(u(rng), u(rng), u(rng));
+  const std::vector<Vec3> v = random_velocities(scene.x.size(), 5);
   for (const int kind : {0, 1}) {
     SphParams P = scene.P;
     P.kernel = Kernel(kind, P.h);
     FluidBuffers fb;
     GridView g;
-    load_sorted(fb, scene, P, v, /*dfsph=*/true, g);
-    stages::FluidView f = fb.view(n);
+    const stages::FluidView f = dfsph_density(fb, scene, P, v, stages::Walls(), g);
     ASSERT_NE(f.nbr_gs, nullptr);
-    stages::WarmSums warm;
-    warm.dens_w = fb.kappa.data();
-    warm.dens_kw = fb.ksum.data();
-    fb.list_and_density(ex, P, f, g, stages::Walls(), /*with_alpha=*/true, warm);
-    f = fb.view(n);
     stages::FluidView fresh = f;
     fresh.nbr_gs = nullptr;
     int listed = 0;
@@ -437,23 +453,13 @@ TEST(SphCells, ListedWallSamplesGiveTheScansBits) {
   ListScene scene = list_scene();
   const SphParams& P = scene.P;
   const int n = int(scene.x.size());
-  std::vector<Vec3> v(static_cast<std::size_t>(n));
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<float> u(-1, 1);
-  for (Vec3& vi : v) vi = Vec3(u(rng), u(rng), u(rng));
   SampleSet<CpuExec> set;
   const int nb = sample_layers(set, scene, P);
   FluidBuffers fb;
   GridView g;
-  load_sorted(fb, scene, P, v, /*dfsph=*/true, g);
-  stages::FluidView f = fb.view(n);
-  stages::WarmSums warm;
-  warm.dens_w = fb.kappa.data();
-  warm.dens_kw = fb.ksum.data();
   stages::Walls w;
   w.fixed = set.view(nb);
-  fb.list_and_density(ex, P, f, g, w, /*with_alpha=*/true, warm);
-  f = fb.view(n);
+  stages::FluidView f = dfsph_density(fb, scene, P, random_velocities(std::size_t(n), 3), w, g);
   stages::fluid_reach(ex, P, f);
 
   auto copy = [](const Real* a, int m) { return std::vector<Real>(a, a + m); };
@@ -514,10 +520,7 @@ TEST(SphCells, StoredTankFactorsGiveTheKernelsBits) {
   CpuExec ex;
   ListScene scene = list_scene();
   const int n = int(scene.x.size());
-  std::vector<Vec3> v(scene.x.size());
-  std::mt19937 rng(9);
-  std::uniform_real_distribution<float> u(-1, 1);
-  for (Vec3& vi : v) vi = Vec3(u(rng), u(rng), u(rng));
+  const std::vector<Vec3> v = random_velocities(scene.x.size(), 9);
   for (const int kind : {0, 1}) {
     SphParams P = scene.P;
     P.kernel = Kernel(kind, P.h);
@@ -525,15 +528,9 @@ TEST(SphCells, StoredTankFactorsGiveTheKernelsBits) {
     const int nb = sample_layers(set, scene, P);
     FluidBuffers fb;
     GridView g;
-    load_sorted(fb, scene, P, v, /*dfsph=*/true, g);
-    stages::FluidView f = fb.view(n);
-    stages::WarmSums warm;
-    warm.dens_w = fb.kappa.data();
-    warm.dens_kw = fb.ksum.data();
     stages::Walls w;
     w.fixed = set.view(nb);
-    fb.list_and_density(ex, P, f, g, w, /*with_alpha=*/true, warm);
-    f = fb.view(n);
+    const stages::FluidView f = dfsph_density(fb, scene, P, v, w, g);
     fb.ksum.zero();
     int listed = 0;
     for (int i = 0; i < n; ++i) listed += (fb.flags.data()[i] >> stages::kTankListed) > 1;

@@ -325,7 +325,10 @@ SPHFEM_HD void for_wall_samples(const FluidView& fl, int i, const Walls& w, cons
 // from there, rij times the factor: Kernel::grad's bits, without its square root and
 // polynomial in each of the step's six residual sweeps (dfsph_source). dfsph_apply keeps
 // evaluating the kernel: with the stored factors its velocities came out differently rounded
-// (not found why; the factors themselves are equal to the bit).
+// (not found why; the factors themselves are equal to the bit). The listed samples have a
+// loop of their own rather than a branch in for_wall_samples' callback: that form also
+// rounded some residuals differently (g++ contracting into fused multiply-adds elsewhere).
+// SphCells.StoredTankFactorsGiveTheKernelsBits catches either.
 template <class F>
 SPHFEM_HD void for_wall_grads(const FluidView& fl, int i, const Walls& w, const Vec3& xi,
                               const Kernel& K, Real h2, F&& f) {

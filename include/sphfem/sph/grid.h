@@ -182,8 +182,9 @@ inline int collect_from_planes(const GridView& g, const Vec3& xi, Real h2, std::
     for (int k = 0; k < groups; ++k) scan(from[k], to[k]);
     return count;
   }
-  // A crowded row (rare): row by row, the scan's own row loop written out again; behind a
-  // callback shared with for_neighbors the fast path above became 1.18x slower (g++ 12).
+  // A crowded row (rare): row by row, the scan's own loop over a row written out again;
+  // behind a callback shared with for_neighbors the fast path above became 1.18x slower
+  // (g++ 12).
   c.for_rows(g, [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t j0 = b; j0 < e; j0 += 8) scan(j0, e);
   });
