@@ -19,27 +19,50 @@ struct CpuExec {
   std::vector<std::vector<std::uint64_t>> scratch_parts;  // the same, a thread's part
 };
 
-// Items a thread takes at a time. The loops' items are independent (each writes its own
-// outputs), so the schedule cannot make a bit depend on the threads; a dynamic one keeps both
-// busy where the work is uneven along the array: the particles are sorted by cell, so the
-// walls' and the surface's particles, and the wall samples with fluid in reach, crowd into one
-// thread's static half (DFSPH 12 % faster on two threads, docs/design.md).
-constexpr int kForChunk = 256;
+// Items a thread takes at a time: about a sixteenth of a thread's share, from kLeastChunk to
+// kMostChunk. The loops' items are independent (each writes its own outputs), so the
+// schedule cannot make a bit depend on the threads; a dynamic one keeps both busy where the
+// work is uneven along the array: the particles are sorted by cell, so the walls' and the
+// surface's particles, and the wall samples with fluid in reach, crowd into one thread's
+// static half (DFSPH 12 % faster on two threads, docs/design.md). Each chunk is taken with an
+// atomic the cores share, which cost more than 256 particles' accelerations' imbalance did
+// (two threads: WCSPH and DFSPH steps 0.93 of the time with 1024 instead of 256); a small
+// body's few hundred tetrahedra still make enough chunks to share.
+constexpr int kLeastChunk = 64, kMostChunk = 1024;
 
+inline int for_chunk(int n) {
+  const int share = n / (16 * omp_get_max_threads());
+  return share < kLeastChunk ? kLeastChunk : (share > kMostChunk ? kMostChunk : share);
+}
+
+// parallel_for of a loop whose items all cost the same few nanoseconds (copies, gathers, cell
+// keys, vector updates): each thread a fixed half. A dynamic schedule's chunks are taken
+// with an atomic shared between the cores, which cost more there than the items: the sort's
+// gathers and cell starts took 0.55 ms a step at two threads dynamically, 0.25 statically.
 template <class F>
-void parallel_for(CpuExec&, int n, F f) {
-#pragma omp parallel for schedule(dynamic, kForChunk)
+void parallel_for_light(CpuExec&, int n, F f) {
+#pragma omp parallel for schedule(static)
   for (int i = 0; i < n; ++i) f(i);
 }
 
-// f(begin, end) for consecutive blocks of `block` items, a block to a thread, taken as the
-// threads come free; then done() once on each thread, after its last block.
+template <class F>
+void parallel_for(CpuExec&, int n, F f) {
+  const int chunk = for_chunk(n);
+#pragma omp parallel for schedule(dynamic, chunk)
+  for (int i = 0; i < n; ++i) f(i);
+}
+
+// f(begin, end) for consecutive blocks of `block` items, kBlocksTaken consecutive blocks to a
+// thread, taken as the threads come free (fewer shared atomics; the DFSPH density pass lists
+// 64 particles a block); then done() once on each thread, after its last block.
+constexpr int kBlocksTaken = 4;
+
 template <class F, class G>
 void parallel_blocks(CpuExec&, int n, int block, F f, G done) {
   const int blocks = n > 0 ? (n + block - 1) / block : 0;
 #pragma omp parallel
   {
-#pragma omp for schedule(dynamic, 1) nowait
+#pragma omp for schedule(dynamic, kBlocksTaken) nowait
     for (int b = 0; b < blocks; ++b) f(b * block, b == blocks - 1 ? n : (b + 1) * block);
     done();
   }

@@ -58,6 +58,13 @@ void parallel_for(CudaExec& ex, int n, F f, const char* file = __builtin_FILE(),
   if (cuda_sync_checks()) cuda_check(cudaStreamSynchronize(ex.stream), "kernel", file, line);
 }
 
+// The same: a device has no schedule to choose (exec_cpu.h's parallel_for_light).
+template <class F>
+void parallel_for_light(CudaExec& ex, int n, F f, const char* file = __builtin_FILE(),
+                        int line = __builtin_LINE()) {
+  parallel_for(ex, n, f, file, line);
+}
+
 template <class T, class F>
 T reduce_max(CudaExec& ex, int n, T init, F f) {
   if (n <= 0) return init;

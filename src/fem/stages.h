@@ -254,23 +254,23 @@ double cg_update(Exec& ex, int n, Real a, const Vec3* p, const Vec3* q, const Sy
 // p = z + beta p.
 template <class Exec>
 void cg_direction(Exec& ex, int n, Real beta, const Vec3* z, Vec3* p) {
-  parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) { p[i] = z[i] + p[i] * beta; });
+  parallel_for_light(ex, n, [=] SPHFEM_LAMBDA(int i) { p[i] = z[i] + p[i] * beta; });
 }
 
 template <class Exec>
 void accumulate(Exec& ex, int n, const Vec3* src, Vec3* dst) {
-  parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) { dst[i] += src[i]; });
+  parallel_for_light(ex, n, [=] SPHFEM_LAMBDA(int i) { dst[i] += src[i]; });
 }
 
 template <class Exec>
 void add(Exec& ex, int n, const Vec3* a, const Vec3* b, Vec3* out) {
-  parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) { out[i] = a[i] + b[i]; });
+  parallel_for_light(ex, n, [=] SPHFEM_LAMBDA(int i) { out[i] = a[i] + b[i]; });
 }
 
 // v += dv (pinned nodes stay at rest), x += dt v.
 template <class Exec>
 void integrate(Exec& ex, const NodeView nv, const Vec3* dv, Real dt, Vec3* x, Vec3* v) {
-  parallel_for(ex, nv.n, [=] SPHFEM_LAMBDA(int i) {
+  parallel_for_light(ex, nv.n, [=] SPHFEM_LAMBDA(int i) {
     if (nv.pinned[i]) {
       v[i] = Vec3();
       return;

@@ -62,7 +62,7 @@ int hold_walls(Exec& ex, const NodeView nv, const Vec3* x, const Vec3* v, const 
 // f = q - b (the walls' force, N s over the step, from q = A dv).
 template <class Exec>
 void wall_force(Exec& ex, int n, const Vec3* q, const Vec3* b, Vec3* f) {
-  parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) { f[i] = q[i] - b[i]; });
+  parallel_for_light(ex, n, [=] SPHFEM_LAMBDA(int i) { f[i] = q[i] - b[i]; });
 }
 
 // Coulomb friction of the held nodes as impulses in the step's right-hand side b, so that

@@ -58,7 +58,7 @@ inline Real moving_rest_share(const std::vector<Real>& lattice, const std::vecto
 template <class Exec>
 void place_samples(Exec& ex, int n, const int* tri_id, const Vec3* weight, const Tri* tris,
                    const Vec3* node_x, const Vec3* node_v, Vec3* x, Vec3* v) {
-  parallel_for(ex, n, [=] SPHFEM_LAMBDA(int k) {
+  parallel_for_light(ex, n, [=] SPHFEM_LAMBDA(int k) {
     const Tri t = tris[tri_id[k]];
     const Vec3 w = weight[k];
     x[k] = node_x[t.v[0]] * w.x + node_x[t.v[1]] * w.y + node_x[t.v[2]] * w.z;
@@ -69,7 +69,7 @@ void place_samples(Exec& ex, int n, const int* tri_id, const Vec3* weight, const
 // slot[perm[k]] = k: where the sort put each sample.
 template <class Exec>
 void invert(Exec& ex, const std::uint32_t* perm, std::uint32_t* slot, int n) {
-  parallel_for(ex, n, [=] SPHFEM_LAMBDA(int k) { slot[perm[k]] = std::uint32_t(k); });
+  parallel_for_light(ex, n, [=] SPHFEM_LAMBDA(int k) { slot[perm[k]] = std::uint32_t(k); });
 }
 
 // Akinci et al. 2012, eq. 5: psi_b = rho0 / sum_k W_bk over the samples in reach, itself

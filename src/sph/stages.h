@@ -409,7 +409,7 @@ SPHFEM_HD int full_neighborhood(const SphParams& P) { return (P.full_neighbors *
 template <class Exec>
 void cell_keys(Exec& ex, const GridView g, const Vec3* x, std::uint32_t* keys, std::uint32_t* perm,
                int n) {
-  parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) {
+  parallel_for_light(ex, n, [=] SPHFEM_LAMBDA(int i) {
     keys[i] = g.cell(x[i]);
     perm[i] = std::uint32_t(i);
   });
@@ -428,7 +428,7 @@ template <class Exec>
 void cell_starts(Exec& ex, const std::uint32_t* keys, std::uint32_t* start, int n, int cells) {
   constexpr int B = Exec::kSpace == MemSpace::Device ? 1 : kHostCellBlock;
   const int total = cells + 1;
-  parallel_for(ex, (total + B - 1) / B, [=] SPHFEM_LAMBDA(int b) {
+  parallel_for_light(ex, (total + B - 1) / B, [=] SPHFEM_LAMBDA(int b) {
     const std::uint32_t c0 = std::uint32_t(b) * std::uint32_t(B);
     const std::uint32_t c1 = c0 + B < std::uint32_t(total) ? c0 + B : std::uint32_t(total);
     // lower_bound(keys, keys + n, c0)
@@ -450,7 +450,7 @@ void cell_starts(Exec& ex, const std::uint32_t* keys, std::uint32_t* start, int 
 // The positions as three planes (FluidView::planes).
 template <class Exec>
 void position_planes(Exec& ex, const FluidView f) {
-  parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
+  parallel_for_light(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     const Vec3 x = f.x[i];
     f.planes[i] = x.x;
     f.planes[f.planes_stride + i] = x.y;
@@ -460,7 +460,7 @@ void position_planes(Exec& ex, const FluidView f) {
 
 template <class Exec, class T>
 void gather(Exec& ex, const T* src, T* dst, const std::uint32_t* perm, int n) {
-  parallel_for(ex, n, [=] SPHFEM_LAMBDA(int i) { dst[i] = src[perm[i]]; });
+  parallel_for_light(ex, n, [=] SPHFEM_LAMBDA(int i) { dst[i] = src[perm[i]]; });
 }
 
 // The box of the fluid's supports: its particles' bounds widened by the support and a
@@ -933,7 +933,7 @@ Real max_speed2(Exec& ex, const FluidView f) {
 
 template <class Exec>
 void kick(Exec& ex, FluidView f, Real dt) {
-  parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) { f.v[i] += f.a[i] * dt; });
+  parallel_for_light(ex, f.n, [=] SPHFEM_LAMBDA(int i) { f.v[i] += f.a[i] * dt; });
 }
 
 // x += dt v, then the last-resort box; returns how many particles it had to stop. With travel
@@ -1231,7 +1231,7 @@ void wall_rest(Exec& ex, const SphParams P, Real* rest, int* nb_rest, const Boun
 // unchanged when dt changes.
 template <class Exec>
 void dfsph_warm_start(Exec& ex, FluidView f, bool divergence) {
-  parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
+  parallel_for_light(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     f.kappa[i] = divergence ? f.warm_div[i] : f.warm_dens[i];
     f.kappa_sum[i] = Real(0);
   });
@@ -1239,7 +1239,7 @@ void dfsph_warm_start(Exec& ex, FluidView f, bool divergence) {
 
 template <class Exec>
 void wall_warm_start(Exec& ex, const BoundaryView b, bool divergence) {
-  parallel_for(ex, b.n, [=] SPHFEM_LAMBDA(int k) {
+  parallel_for_light(ex, b.n, [=] SPHFEM_LAMBDA(int k) {
     b.kappa[k] = divergence ? b.warm_div[k] : b.warm_dens[k];
     b.kappa_sum[k] = Real(0);
   });
@@ -1250,7 +1250,7 @@ void wall_warm_start(Exec& ex, const BoundaryView b, bool divergence) {
 // size ~ 1 / dt, hardly moves the memory.
 template <class Exec>
 void dfsph_remember(Exec& ex, FluidView f, Real weight, bool divergence) {
-  parallel_for(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
+  parallel_for_light(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
     Real* warm = divergence ? f.warm_div : f.warm_dens;
     warm[i] += weight * (f.kappa_sum[i] - warm[i]);
   });
@@ -1293,14 +1293,14 @@ void wall_accumulate(Exec& ex, const BoundaryView b) {
   if constexpr (Exec::kSpace == MemSpace::Host) {
     // The others' kappa is 0 (wall_source).
     if (b.listed) {
-      parallel_for(ex, b.n_listed, [=](int p) {
+      parallel_for_light(ex, b.n_listed, [=](int p) {
         const std::uint32_t k = b.listed[p];
         b.kappa_sum[k] += b.kappa[k];
       });
       return;
     }
   }
-  parallel_for(ex, b.n, [=] SPHFEM_LAMBDA(int k) { b.kappa_sum[k] += b.kappa[k]; });
+  parallel_for_light(ex, b.n, [=] SPHFEM_LAMBDA(int k) { b.kappa_sum[k] += b.kappa[k]; });
 }
 
 // Appends one emitter layer at slots [first, first + count), at rest in the solver's memory.
