@@ -24,10 +24,11 @@ struct CpuExec {
 // schedule cannot make a bit depend on the threads; a dynamic one keeps both busy where the
 // work is uneven along the array: the particles are sorted by cell, so the walls' and the
 // surface's particles, and the wall samples with fluid in reach, crowd into one thread's
-// static half (DFSPH 12 % faster on two threads, docs/design.md). Each chunk is taken with an
-// atomic the cores share, which cost more than 256 particles' accelerations' imbalance did
-// (two threads: WCSPH and DFSPH steps 0.93 of the time with 1024 instead of 256); a small
-// body's few hundred tetrahedra still make enough chunks to share.
+// static half (DFSPH 12 % faster on two threads, docs/design.md). Chunks of 1024 particles
+// instead of 256, with the light loops below: WCSPH and DFSPH steps 0.90 and 0.94 of the time
+// on two threads; a thread's chunk is one stream through the lists and arrays for longer (a
+// chunk itself takes about 40 ns to hand out). A small body's few hundred tetrahedra still
+// make enough chunks to share.
 constexpr int kLeastChunk = 64, kMostChunk = 1024;
 
 inline int for_chunk(int n) {
@@ -36,9 +37,9 @@ inline int for_chunk(int n) {
 }
 
 // parallel_for of a loop whose items all cost the same few nanoseconds (copies, gathers, cell
-// keys, vector updates): each thread a fixed half. A dynamic schedule's chunks are taken
-// with an atomic shared between the cores, which cost more there than the items: the sort's
-// gathers and cell starts took 0.55 ms a step at two threads dynamically, 0.25 statically.
+// keys, vector updates): each thread a fixed half, one stream the hardware's prefetchers
+// follow. The sort's gathers and cell starts took 0.55 ms a step at two threads in dynamic
+// chunks of 256, 0.25 statically.
 template <class F>
 void parallel_for_light(CpuExec&, int n, F f) {
 #pragma omp parallel for schedule(static)
@@ -53,8 +54,8 @@ void parallel_for(CpuExec&, int n, F f) {
 }
 
 // f(begin, end) for consecutive blocks of `block` items, kBlocksTaken consecutive blocks to a
-// thread, taken as the threads come free (fewer shared atomics; the DFSPH density pass lists
-// 64 particles a block); then done() once on each thread, after its last block.
+// thread, taken as the threads come free (longer streams; the DFSPH density pass lists 64
+// particles a block); then done() once on each thread, after its last block.
 constexpr int kBlocksTaken = 4;
 
 template <class F, class G>
