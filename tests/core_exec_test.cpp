@@ -24,26 +24,26 @@ void on_threads(F body) {
   omp_set_num_threads(before);
 }
 
-TEST(CoreExec, ParallelForVisitsEveryItemOnce) {
-  CpuExec ex;
+// loop(n, f) calls f(i) for every i < n exactly once, on 1, 2 and 3 threads.
+template <class Loop>
+void expect_every_item_once(Loop loop) {
   on_threads([&](int t) {
     for (int n : kSizes) {
       std::vector<std::atomic<int>> seen(static_cast<std::size_t>(n));
-      parallel_for(ex, n, [&](int i) { seen[std::size_t(i)].fetch_add(1); });
+      loop(n, [&](int i) { seen[std::size_t(i)].fetch_add(1); });
       for (int i = 0; i < n; ++i) ASSERT_EQ(seen[std::size_t(i)].load(), 1) << n << " " << t;
     }
   });
 }
 
+TEST(CoreExec, ParallelForVisitsEveryItemOnce) {
+  CpuExec ex;
+  expect_every_item_once([&](int n, auto f) { parallel_for(ex, n, f); });
+}
+
 TEST(CoreExec, ParallelForLightVisitsEveryItemOnce) {
   CpuExec ex;
-  on_threads([&](int t) {
-    for (int n : kSizes) {
-      std::vector<std::atomic<int>> seen(static_cast<std::size_t>(n));
-      parallel_for_light(ex, n, [&](int i) { seen[std::size_t(i)].fetch_add(1); });
-      for (int i = 0; i < n; ++i) ASSERT_EQ(seen[std::size_t(i)].load(), 1) << n << " " << t;
-    }
-  });
+  expect_every_item_once([&](int n, auto f) { parallel_for_light(ex, n, f); });
 }
 
 // The chunks: within their bounds, and enough of them for every thread where the loop is
