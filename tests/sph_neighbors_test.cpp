@@ -107,6 +107,56 @@ TEST(SphNeighbors, ListsFromPlanesAndFromVectorsEqualTheScan) {
   }
 }
 
+// The scan that sifts its candidates from the planes (the wall samples' scans of the fluid)
+// makes for_neighbors' calls in its order with the same arguments to the bit: at the particles,
+// at random points, and at points exactly at and just inside the support's edge of a particle.
+TEST(SphNeighbors, SiftedScanCallsAsTheScan) {
+  const SortedCloud c;
+  CpuExec ex;
+  std::vector<Real> planes(3 * std::size_t(c.n) + 7);
+  stages::FluidView f;
+  f.n = c.n;
+  f.x = const_cast<Vec3*>(c.xs.data());
+  f.planes = planes.data();
+  f.planes_stride = std::size_t(c.n);
+  stages::position_planes(ex, f);
+  const Real h2 = c.h * c.h;
+  std::vector<Vec3> at(c.xs);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-0.1f, 1.1f);
+  for (int k = 0; k < 2000; ++k) at.push_back(Vec3(u(rng), u(rng), u(rng) * 0.5f));
+  for (int k = 0; k < 500; ++k) {
+    const Vec3 x = c.xs[std::size_t(k * 5)];
+    at.push_back(x + Vec3(c.h, 0, 0));
+    at.push_back(x - Vec3(0, c.h, 0));
+    at.push_back(x + Vec3(0, 0, std::nextafter(c.h, Real(0))));
+  }
+  struct Call {
+    std::uint32_t j;
+    Vec3 r;
+    Real r2;
+  };
+  auto same = [](const Call& a, const Call& b) {
+    return a.j == b.j && a.r.x == b.r.x && a.r.y == b.r.y && a.r.z == b.r.z && a.r2 == b.r2;
+  };
+  long calls = 0;
+  for (std::size_t q = 0; q < at.size(); ++q) {
+    std::vector<Call> scan, sifted;
+    for_neighbors(c.g, c.xs.data(), at[q], h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
+      scan.push_back({j, r, r2});
+    });
+    for_neighbors(c.g, c.xs.data(), planes.data(), std::size_t(c.n), at[q], h2,
+                  [&](std::uint32_t j, const Vec3& r, Real r2) {
+                    sifted.push_back({j, r, r2});
+                  });
+    ASSERT_EQ(sifted.size(), scan.size()) << "query " << q;
+    for (std::size_t k = 0; k < scan.size(); ++k)
+      ASSERT_TRUE(same(sifted[k], scan[k])) << "query " << q << ", call " << k;
+    calls += long(scan.size());
+  }
+  EXPECT_GT(calls, 20L * c.n);
+}
+
 TEST(SphNeighbors, RadixSortIsStableAndMatchesStdSort) {
   CpuExec ex;
   std::mt19937 rng(3);

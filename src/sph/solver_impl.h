@@ -101,6 +101,7 @@ class SolverT final : public FluidSolver {
   }
 
   void sort(const MovingSurface& moving) override {
+    planes_laid_ = false;
     forget_wall_lists();
     moving_.place(ex_, P_, moving, key_bits());
     fluid_.sort(ex_, grid(fluid_.start.data()), n_, key_bits(), model_.solver == SolverKind::DFSPH);
@@ -122,6 +123,7 @@ class SolverT final : public FluidSolver {
       f.planes = &fluid_.a.data()[0].x;
       f.planes_stride = std::size_t(fluid_.cap) + 1;
       stages::position_planes(ex_, f);
+      planes_laid_ = true;
     }
     // Under DFSPH the density pass also takes the fluid pairs' sums of the density solve's
     // warm-start filter (stages::WarmSums), into kappa and kappa_sum, free until the divergence
@@ -180,9 +182,17 @@ class SolverT final : public FluidSolver {
     const GridView g = grid(fluid_.start.data());
     const Real rdt = Real(dt_);
     if (wcsph) {
-      stages::wall_pressure(ex_, P_, f, g, w.fixed);
-      if (w.moving.n) stages::wall_pressure(ex_, P_, f, g, w.moving);
+      // The wall samples' scans sift their candidates from the planes the density pass laid
+      // out in a, until the accelerations below overwrite them.
+      FluidView fp = f;
+      if (planes_laid_) {
+        fp.planes = &fluid_.a.data()[0].x;
+        fp.planes_stride = std::size_t(fluid_.cap) + 1;
+      }
+      stages::wall_pressure(ex_, P_, fp, g, w.fixed);
+      if (w.moving.n) stages::wall_pressure(ex_, P_, fp, g, w.moving);
     }
+    planes_laid_ = false;
     // DFSPH: the fluid pairs of the density solve's warm-start sweep, summed here into tmp3
     // (FluidView::gwall, spent since wall_density) and applied by pressure().
     if (wcsph)
@@ -213,6 +223,7 @@ class SolverT final : public FluidSolver {
   }
 
   void drift(const DriftLimits& limits, StepInfo& info) override {
+    planes_laid_ = false;
     info.clamped = stages::drift(ex_, P_, view(), Real(dt_), limits.travel, limits.surface_v);
     reached_.reached = 0;
     forget_wall_lists();
@@ -242,6 +253,7 @@ class SolverT final : public FluidSolver {
   // Densities and neighbour counts of the present positions, computed on a cell-sorted copy
   // (scratch buffers only) and returned in the state's order, which stays as it is.
   void snapshot(FluidSnapshot& out, SurfaceQuery* surfaces) override {
+    planes_laid_ = false;  // a takes the sorted velocities
     if (!surfaces) surfaces = hook_;
     forget_wall_lists();  // the moving samples are placed again
     const bool dfsph = model_.solver == SolverKind::DFSPH;
@@ -310,6 +322,7 @@ class SolverT final : public FluidSolver {
   }
 
   void load(const FluidState& s) override {
+    planes_laid_ = false;
     const std::size_t n = std::size_t(s.n);
     if (s.n < 0 || s.n > cap_)
       throw std::invalid_argument("fluid state: " + std::to_string(s.n) +
@@ -570,6 +583,7 @@ class SolverT final : public FluidSolver {
   SampleSet<Exec> tank_;                 // the tank's wall samples (upload_tank)
   int tank_n_ = 0;                       // how many
   Vec3 quiet_lo_, quiet_hi_;             // BoundaryView::quiet_lo of the tank
+  bool planes_laid_ = false;             // a holds the positions as planes (density() to forces)
   FluidView reached_;                    // FluidView::reach_lo of this step (sort), until drift
   MovingSamples<Exec> moving_;           // boundary-particle coupling: samples on a moving surface
   int active_walls_ = 0;                 // wall samples with fluid in reach (DFSPH)

@@ -908,12 +908,13 @@ void wall_pressure(Exec& ex, const SphParams P, const FluidView f, const GridVie
     Real sw = 0, sp = 0;
     Vec3 srw;
     if (!out_of_reach(f, xb))
-      for_neighbors(g, f.x, xb, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-        const Real w = P.kernel.W(std::sqrt(r2));
-        sw += w;
-        sp += f.p[j] * w;
-        srw += r * (f.rho[j] * w);
-      });
+      for_neighbors(g, f.x, f.planes, f.planes_stride, xb, P.h2,
+                    [&](std::uint32_t j, const Vec3& r, Real r2) {
+                      const Real w = P.kernel.W(std::sqrt(r2));
+                      sw += w;
+                      sp += f.p[j] * w;
+                      srw += r * (f.rho[j] * w);
+                    });
     Real pb = sw > Real(0) ? (sp + dot(P.gravity, srw)) / sw : Real(0);
     if (pb < Real(0)) pb = Real(0);
     const Real rhob = P.rho0 * (Real(1) + pb / P.stiffness);
@@ -1136,19 +1137,20 @@ SPHFEM_HD_INLINE int wall_density_at(const SphParams& P, const FluidView& f, con
   int count = 0;
   const Real vol = b.psi[k] / P.rho0;
   if (!out_of_reach(f, xb))
-    for_neighbors(g, f.x, xb, P.h2, [&](std::uint32_t j, const Vec3& r, Real r2) {
-      hit(j);
-      const Real rr = std::sqrt(r2);
-      const Vec3 gw = P.kernel.grad(r, rr) * vol;
-      const Real w = P.kernel.W(rr);
-      sum += w;
-      grad2 += norm2(gw);
-      shared -= dot(gw, f.gwall[j]);
-      kdiv += f.warm_div[j] * w;
-      kdens += f.warm_dens[j] * w;
-      srw += r * w;
-      ++count;
-    });
+    for_neighbors(g, f.x, f.planes, f.planes_stride, xb, P.h2,
+                  [&](std::uint32_t j, const Vec3& r, Real r2) {
+                    hit(j);
+                    const Real rr = std::sqrt(r2);
+                    const Vec3 gw = P.kernel.grad(r, rr) * vol;
+                    const Real w = P.kernel.W(rr);
+                    sum += w;
+                    grad2 += norm2(gw);
+                    shared -= dot(gw, f.gwall[j]);
+                    kdiv += f.warm_div[j] * w;
+                    kdens += f.warm_dens[j] * w;
+                    srw += r * w;
+                    ++count;
+                  });
   b.rho[k] = b.rest[k] + P.mass * sum;
   b.full[k] = b.nb_rest[k] + count >= full_neighborhood(P) ? 1 : 0;
   const Real diag = shared > grad2 ? shared : grad2;
