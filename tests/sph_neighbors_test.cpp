@@ -46,6 +46,20 @@ struct SortedCloud {
   }
 };
 
+// The cloud's positions as planes (FluidView::planes, stride n), with the seven Reals past the
+// z plane that the host's groups of eight read.
+std::vector<Real> cloud_planes(const SortedCloud& c) {
+  CpuExec ex;
+  std::vector<Real> planes(3 * std::size_t(c.n) + 7);
+  stages::FluidView f;
+  f.n = c.n;
+  f.x = const_cast<Vec3*>(c.xs.data());
+  f.planes = planes.data();
+  f.planes_stride = std::size_t(c.n);
+  stages::position_planes(ex, f);
+  return planes;
+}
+
 TEST(SphNeighbors, GridSearchEqualsBruteForce) {
   const SortedCloud c;
   const int n = c.n;
@@ -76,15 +90,7 @@ TEST(SphNeighbors, GridSearchEqualsBruteForce) {
 // or as planes (FluidView::planes), on the host's packed path and on the capped one.
 TEST(SphNeighbors, ListsFromPlanesAndFromVectorsEqualTheScan) {
   const SortedCloud c;
-  CpuExec ex;
-  // Seven Reals past the z plane: the host's groups of eight read there (FluidView::planes).
-  std::vector<Real> planes(3 * std::size_t(c.n) + 7);
-  stages::FluidView f;
-  f.n = c.n;
-  f.x = const_cast<Vec3*>(c.xs.data());
-  f.planes = planes.data();
-  f.planes_stride = std::size_t(c.n);
-  stages::position_planes(ex, f);
+  const std::vector<Real> planes = cloud_planes(c);
   const Real h2 = c.h * c.h;
   for (int last : {255, 20}) {  // room for all; the overflow into the last slot
     for (int i = 0; i < c.n; ++i) {
@@ -112,14 +118,7 @@ TEST(SphNeighbors, ListsFromPlanesAndFromVectorsEqualTheScan) {
 // at random points, and at points exactly at and just inside the support's edge of a particle.
 TEST(SphNeighbors, SiftedScanCallsAsTheScan) {
   const SortedCloud c;
-  CpuExec ex;
-  std::vector<Real> planes(3 * std::size_t(c.n) + 7);
-  stages::FluidView f;
-  f.n = c.n;
-  f.x = const_cast<Vec3*>(c.xs.data());
-  f.planes = planes.data();
-  f.planes_stride = std::size_t(c.n);
-  stages::position_planes(ex, f);
+  const std::vector<Real> planes = cloud_planes(c);
   const Real h2 = c.h * c.h;
   std::vector<Vec3> at(c.xs);
   std::mt19937 rng(5);

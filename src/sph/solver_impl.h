@@ -120,8 +120,7 @@ class SolverT final : public FluidSolver {
     // The list build's scan reads the positions as planes, laid out in a (free until the
     // forces; the host only: a device scans one candidate a thread).
     if (Exec::kSpace == MemSpace::Host) {
-      f.planes = &fluid_.a.data()[0].x;
-      f.planes_stride = std::size_t(fluid_.cap) + 1;
+      see_planes(f);
       stages::position_planes(ex_, f);
       planes_laid_ = true;
     }
@@ -185,10 +184,7 @@ class SolverT final : public FluidSolver {
       // The wall samples' scans sift their candidates from the planes the density pass laid
       // out in a, until the accelerations below overwrite them.
       FluidView fp = f;
-      if (planes_laid_) {
-        fp.planes = &fluid_.a.data()[0].x;
-        fp.planes_stride = std::size_t(fluid_.cap) + 1;
-      }
+      if (planes_laid_) see_planes(fp);
       stages::wall_pressure(ex_, P_, fp, g, w.fixed);
       if (w.moving.n) stages::wall_pressure(ex_, P_, fp, g, w.moving);
     }
@@ -453,6 +449,12 @@ class SolverT final : public FluidSolver {
     stages::cell_starts(ex_, keys.data(), tank_.start.data(), nb, g.cells());
     stages::wall_rest(ex_, P_, tank_.rest.data(), tank_.nb_rest.data(), tank());
     exec_sync(ex_);
+  }
+
+  // Points f at the positions as planes, laid out in a (FluidView::planes).
+  void see_planes(FluidView& f) {
+    f.planes = &fluid_.a.data()[0].x;
+    f.planes_stride = std::size_t(fluid_.cap) + 1;
   }
 
   // CFL step: the particle spacing over the fastest speed (plus sound speed for WCSPH), capped
