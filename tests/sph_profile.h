@@ -1,6 +1,7 @@
 // The hydrostatic check shared by the SPH column tests: snapshots of a settled column, the
-// particles of a vertical line through it binned by height, their mean pressure compared with
-// rho g (H - y), H the free surface (the top particle centres, averaged, plus a radius).
+// particles within a square prism about a vertical line binned by height, their mean pressure
+// compared with rho g (H - y), H the free surface (the top particle centres, averaged, plus a
+// radius).
 #pragma once
 
 #include <algorithm>
