@@ -176,21 +176,24 @@ double held_by_run(const SceneSpec& s) {
 // The memory estimate (what `check` prints and the limits compare with the free memory) against
 // the heap a simulation really holds after its first steps (bytes in use, mapped chunks
 // included): never below it, and within a quarter above it. Fluid alone, with
-// the tank's faces in the rays (the ray coupling's buffers), and with a box obstacle too.
+// the tank's faces in the rays (the ray coupling's buffers), and with a box obstacle too,
+// under each solver (their lists and buffers differ).
 TEST_F(SceneLimits, MemoryEstimateBoundsWhatARunHolds) {
-  const std::string fluid = R"("simulation": {"solver": "dfsph"},
+  for (const std::string solver : {"dfsph", "wcsph"}) {
+    const std::string fluid = R"("simulation": {"solver": ")" + solver + R"("},
       "fluid": {"blocks": [{"min": [0,0,0], "max": [0.3,0.15,0.3]}], "particle_radius": 0.004},
       "domain": {"min": [0,0,0], "max": [0.3,0.3,0.3]})";
-  const char* extra[] = {R"("coupling": {"tank_rays": false})", R"("coupling": {})",
-                         R"("obstacles": [{"min": [0.1,0,0.1], "max": [0.2,0.25,0.2]}])"};
-  for (const char* e : extra) {
-    const SceneSpec s = load_scene(write("{" + fluid + ", " + e + "}"));
-    const SceneSize z = scene_size(s);
-    const double held = held_by_run(s);
-    std::printf("%s: estimate %.0f B a particle, held %.0f B a particle (%.0f particles)\n", e,
-                z.bytes() / z.capacity, held / z.capacity, z.capacity);
-    EXPECT_GE(z.bytes(), held) << e;
-    EXPECT_LE(z.bytes(), 1.25 * held) << e;
+    const char* extra[] = {R"("coupling": {"tank_rays": false})", R"("coupling": {})",
+                           R"("obstacles": [{"min": [0.1,0,0.1], "max": [0.2,0.25,0.2]}])"};
+    for (const char* e : extra) {
+      const SceneSpec s = load_scene(write("{" + fluid + ", " + e + "}"));
+      const SceneSize z = scene_size(s);
+      const double held = held_by_run(s);
+      std::printf("%s, %s: estimate %.0f B a particle, held %.0f B a particle (%.0f particles)\n",
+                  solver.c_str(), e, z.bytes() / z.capacity, held / z.capacity, z.capacity);
+      EXPECT_GE(z.bytes(), held) << solver << ", " << e;
+      EXPECT_LE(z.bytes(), 1.25 * held) << solver << ", " << e;
+    }
   }
 }
 

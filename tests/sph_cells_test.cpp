@@ -550,6 +550,58 @@ TEST(SphCells, StoredTankFactorsGiveTheKernelsBits) {
   }
 }
 
+struct ForcesExec : CpuExec {};
+
+// WCSPH's forces read what they take of a neighbour from its records (FluidView::rec_x,
+// rec_v) where the host keeps them: the accelerations must be those the arrays give, to the
+// bit, for both kernels, with and without XSPH and artificial viscosity, and where lists
+// overflowed (those particles scan the grid and read the arrays).
+TEST(SphCells, RecordsGiveTheForcesBits) {
+  CpuExec ex;
+  // The accelerations instantiated for a type of this file's own: instantiated for CpuExec
+  // here, the linker may take this file's copy for the library's too, and this file's inlining
+  // gave the DFSPH scenes' accelerations other bits (Paper/SimState200).
+  ForcesExec fex;
+  const ListScene scene = list_scene();
+  const int n = int(scene.x.size());
+  const std::vector<Vec3> v = random_velocities(std::size_t(n), 5);
+  for (const int kind : {0, 1})
+    for (const int cap : {0, 8})
+      for (const Real smoothing : {Real(0), Real(0.1)})
+        for (const Real av : {Real(0), Real(0.05)}) {
+          SphParams P = scene.P;
+          P.kernel = Kernel(kind, P.h);
+          P.viscosity = Real(1e-3);
+          P.xsph = smoothing;
+          P.alpha_av = av;
+          P.sound_speed = Real(20);
+          P.gravity = Vec3(0, Real(-9.81), 0);
+          FluidBuffers fb;
+          GridView g;
+          load_sorted(fb, scene, P, v, /*dfsph=*/false, g, cap);
+          stages::FluidView f = fb.view(n);
+          fb.list_and_density(ex, P, f, g, stages::Walls(), /*with_alpha=*/false);
+          const Real dt = Real(1e-3);
+          stages::accelerations(fex, P, f, g, stages::Walls(), true, dt, nullptr, nullptr);
+          const std::vector<Vec3> from_arrays(fb.a.data(), fb.a.data() + n);
+          ASSERT_GE(fb.records.size(), 8 * std::size_t(fb.cap));
+          f.rec_x = fb.records.data();
+          f.rec_v = f.rec_x + 4 * std::size_t(fb.cap);
+          stages::pair_records(ex, P, f);
+          fb.a.zero();
+          stages::accelerations(fex, P, f, g, stages::Walls(), true, dt, nullptr, nullptr);
+          int pushed = 0;
+          for (int i = 0; i < n; ++i) {
+            const Vec3 a = fb.a.data()[i], b = from_arrays[std::size_t(i)];
+            ASSERT_TRUE(a.x == b.x && a.y == b.y && a.z == b.z)
+                << "kernel " << kind << ", cap " << cap << ", xsph " << smoothing << ", av " << av
+                << ", particle " << i;
+            pushed += norm(b - P.gravity) > Real(1);
+          }
+          EXPECT_GT(pushed, n / 2);  // the pairs' terms are there to compare
+        }
+}
+
 TEST(SphCells, OverflowingListsFallBackToTheGridInEveryLayout) {
   check_lists(8, /*packed=*/false);
   check_lists(8, /*packed=*/true);

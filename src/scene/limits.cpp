@@ -105,13 +105,14 @@ double fluid_bytes(double capacity, double wall_samples, double grid_cells, bool
   // entries a particle (31.5 measured in the dam break and in a tank: fluid neighbours padded
   // to eight, the tank's samples by the walls) of 4 B, with the pairs' kernel factors beside
   // them (4 B more); the radix sort's scratch, grown by a quarter (10 B); the initial x0, v0
-  // in the scene's model (24 B); under DFSPH the divergence warm start's fluid pairs (12 B).
+  // in the scene's model (24 B); under DFSPH the divergence warm start's fluid pairs (12 B),
+  // under WCSPH the forces' records of a neighbour (8 x 4 B).
   // Per wall sample: x (12 B), nine reals and two ints (44 B), x and psi in the scene's model
   // (16 B). Per cell: the fluid's and the samples' cell starts (8 B). Under DFSPH the host lists
   // the fluid neighbours of the samples with fluid in reach (WallLists): at most about 0.3 of them
   // a particle (0.27 measured in a half-filled tank, 0.11 in the dam break), each about 10 entries
   // in a pool a quarter longer, and its place and block (62 B).
-  const double lists = dfsph ? 36.0 * 8.0 + 12.0 : 64.0 * 4.0;
+  const double lists = dfsph ? 36.0 * 8.0 + 12.0 : 64.0 * 4.0 + 8 * 4.0;
   const double wall_lists = dfsph ? std::min(wall_samples, 0.3 * capacity) * 62.0 : 0.0;
   return capacity * (4 * 12.0 + 8 * 4.0 + 7 * 4.0 + lists + 10.0 + 24.0) +
          wall_samples * (56.0 + 16.0) + wall_lists + grid_cells * 8.0 + kFixedBytes;

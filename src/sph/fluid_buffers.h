@@ -37,6 +37,7 @@ struct FluidBuffers {
   Buffer<std::uint32_t> nbr_at;  // the host's: where each list begins (FluidView::nbr_at)
   Buffer<Real> nbr_gs;           // the host's, DFSPH: the pairs' kernel factors (FluidView::nbr_gs)
   Buffer<Vec3> warm_dv;  // the host's, DFSPH: the divergence warm start's pairs (WarmSums::div_dv)
+  Buffer<Real> records;  // the host's, WCSPH: FluidView::rec_x, then rec_v (4 Reals a particle)
   int nbr_cap = 0;
   int cap = 0;                   // particles there is room for
   bool nbr_interleaved = false;  // the layout of nbr (FluidView::nbr_si, view())
@@ -87,6 +88,9 @@ struct FluidBuffers {
       nbr = Buffer<std::uint32_t>(s, std::size_t(cap) * std::size_t(nbr_cap));
     }
     nbr_n = Buffer<int>(s, cap);
+    // WCSPH on the host: the forces' records (FluidView::rec_x, rec_v), 32 B a particle; a
+    // device reads the arrays, one neighbour a thread.
+    if (s == MemSpace::Host && !factors) records = Buffer<Real>(s, 8 * std::size_t(cap));
     for (Buffer<std::uint32_t>* b : {&id, &keys, &perm}) *b = Buffer<std::uint32_t>(s, cap);
     start = Buffer<std::uint32_t>(s, std::size_t(cells) + 1);
     start.zero();  // no earlier sort (sort_moved)

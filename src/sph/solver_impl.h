@@ -191,10 +191,18 @@ class SolverT final : public FluidSolver {
     planes_laid_ = false;
     // DFSPH: the fluid pairs of the density solve's warm-start sweep, summed here into tmp3
     // (FluidView::gwall, spent since wall_density) and applied by pressure().
-    if (wcsph)
-      stages::accelerations(ex_, P_, f, g, w, true, rdt, nullptr, nullptr);
-    else
+    if (wcsph) {
+      // What the pairs read of a neighbour, laid out as its records (FluidView::rec_x).
+      FluidView fr = f;
+      if (fluid_.records.size()) {
+        fr.rec_x = fluid_.records.data();
+        fr.rec_v = fr.rec_x + 4 * std::size_t(cap_);
+        stages::pair_records(ex_, P_, fr);
+      }
+      stages::accelerations(ex_, P_, fr, g, w, true, rdt, nullptr, nullptr);
+    } else {
       stages::accelerations(ex_, P_, f, g, w, false, rdt, fluid_.tmpr.data(), fluid_.tmp3.data());
+    }
     if (w.moving.n)
       stages::sample_force_impulse(ex_, P_, f, g, w.moving, wcsph, rdt, moving_.impulse());
     stages::kick(ex_, f, rdt);

@@ -66,6 +66,12 @@ struct FluidView {
   // there.
   Real* planes = nullptr;
   std::size_t planes_stride = 0;
+  // WCSPH on the host: what the forces read of a neighbour j, four Reals a particle in two
+  // records, (x_j, p_j / rho_j^2) and (v_j, m / rho_j) (pair_records), so that a group of
+  // eight neighbours is two gathers of 16 bytes each a neighbour; nullptr: read from x, v, p
+  // and rho (FluidNeighbour).
+  Real* rec_x = nullptr;
+  Real* rec_v = nullptr;
   // Where the fluid's supports end this step (fluid_reach): no particle is within reach of a
   // point outside [reach_lo, reach_hi]. reached = 0: not known, every point may be.
   int reached = 0;
@@ -183,8 +189,10 @@ SPHFEM_HD_INLINE T sum_fluid_pairs(const FluidView& f, const GridView& g, const 
     if (!WithW && gs && !StoreFactors)
       return lanes::sum_pairs_stored<T>(list, gs, n, f.x, xi, term);
     if (K.kind == 0)
-      return lanes::sum_pairs<WithW, T, StoreFactors>(K.cubic, list, n, f.x, xi, term, gs);
-    return lanes::sum_pairs<WithW, T, StoreFactors>(K.wendland, list, n, f.x, xi, term, gs);
+      return lanes::sum_pairs<WithW, T, StoreFactors>(K.cubic, list, n, lanes::ByIndex{f.x}, xi,
+                                                      term, gs);
+    return lanes::sum_pairs<WithW, T, StoreFactors>(K.wendland, list, n, lanes::ByIndex{f.x}, xi,
+                                                    term, gs);
   }
 #endif
   T sum{};
@@ -193,6 +201,75 @@ SPHFEM_HD_INLINE T sum_fluid_pairs(const FluidView& f, const GridView& g, const 
     sum += term(j, r, r2, WithW ? K.W(rr) : Real(0), K.grad(r, rr));
   });
   return sum;
+}
+
+// What a fluid pair's term reads of its neighbour j besides its arrays (at(a, j)): v_j,
+// p_j / rho_j^2 and m / rho_j, for one j or, in the host's lanes, eight.
+template <class J, class V, class R>
+struct FluidNeighbour {
+  J j;
+  V v;
+  R p_rho2, m_rho;
+};
+
+// FluidNeighbour of j from the arrays; pair_records stores the same values (the same bits).
+template <class J>
+SPHFEM_HD_INLINE auto fluid_neighbour(const SphParams& P, const FluidView& f, const J& j) {
+  const auto rhoj = at(f.rho, j);
+  using R = std::decay_t<decltype(rhoj)>;
+  using V = std::decay_t<decltype(at(f.v, j))>;
+  return FluidNeighbour<J, V, R>{j, at(f.v, j), at(f.p, j) / (rhoj * rhoj), P.mass / rhoj};
+}
+
+// FluidView's records: (x_i, p_i / rho_i^2) and (v_i, m / rho_i) for the forces' pairs.
+template <class Exec>
+void pair_records(Exec& ex, const SphParams P, FluidView f) {
+  parallel_for_light(ex, f.n, [=] SPHFEM_LAMBDA(int i) {
+    const FluidNeighbour<std::uint32_t, Vec3, Real> q = fluid_neighbour(P, f, std::uint32_t(i));
+    const Vec3 x = f.x[i];
+    Real* rx = f.rec_x + 4 * std::size_t(i);
+    Real* rv = f.rec_v + 4 * std::size_t(i);
+    rx[0] = x.x, rx[1] = x.y, rx[2] = x.z, rx[3] = q.p_rho2;
+    rv[0] = q.v.x, rv[1] = q.v.y, rv[2] = q.v.z, rv[3] = q.m_rho;
+  });
+}
+
+#if SPHFEM_PAIR_LANES
+namespace lanes_records {
+// Eight neighbours from FluidView's records (lanes::ByIndex's form).
+struct Gather {
+  using Of = FluidNeighbour<lanes::J8, lanes::V8, lanes::R8>;
+  const Real* rec_x;
+  const Real* rec_v;
+  SPHFEM_LANE void operator()(const lanes::J8& j, lanes::V8& xj, Of& of) const {
+    lanes::gather4(rec_x, 4, j, xj.x, xj.y, xj.z, of.p_rho2);
+    lanes::gather4(rec_v, 4, j, of.v.x, of.v.y, of.v.z, of.m_rho);
+    of.j = j;
+  }
+};
+}  // namespace lanes_records
+#endif
+
+// sum_fluid_pairs with a term that takes FluidNeighbour instead of j: the host's lanes read
+// the records where FluidView has them, any other path the arrays; the same bits either way.
+template <bool WithW, class T, class Term>
+SPHFEM_HD_INLINE T sum_fluid_neighbours(const SphParams& P, const FluidView& f, const GridView& g,
+                                        int i, const Vec3& xi, Term&& term) {
+#if SPHFEM_PAIR_LANES
+  const int n = f.nbr && f.rec_x ? f.nbr_n[i] : -1;
+  if (n >= 0 && f.nbr_sk == 1) {
+    const std::uint32_t* list = f.nbr + list_start(f, i);
+    if (i + kListAhead < f.n) lanes::prefetch_list(f.nbr + list_start(f, i + kListAhead));
+    const lanes_records::Gather gather{f.rec_x, f.rec_v};
+    if (P.kernel.kind == 0)
+      return lanes::sum_pairs<WithW, T, false>(P.kernel.cubic, list, n, gather, xi, term, nullptr);
+    return lanes::sum_pairs<WithW, T, false>(P.kernel.wendland, list, n, gather, xi, term, nullptr);
+  }
+#endif
+  return sum_fluid_pairs<WithW, T>(
+      f, g, P.kernel, i, xi, P.h2,
+      [&](const auto& j, const auto& r, const auto& r2, const auto& wk, const auto& gw)
+          SPHFEM_TERM { return term(fluid_neighbour(P, f, j), r, r2, wk, gw); });
 }
 
 // Bits of FluidView::flags, set by density() for the step's later passes.
@@ -826,41 +903,39 @@ void accelerations(Exec& ex, const SphParams P, FluidView f, const GridView g, c
     const Real hs = Real(0.5) * P.h;  // smoothing length of the artificial viscosity
     const Real inv_dt = dt > Real(0) ? Real(1) / dt : Real(0);
     const Real* rho = f.rho;
-    const Real* p = f.p;
-    const Vec3* v = f.v;
     // The pair sum with its switches fixed at compile time: a branch on a switch inside the
     // pair loop kept g++ from vectorising it.
-    auto pairs = [&, rho, p, v](auto press, auto av, auto xsph) {
-      auto pair = [&](const auto& j, const auto& r, const auto& r2, const auto& wk,
+    auto pairs = [&, rho](auto press, auto av, auto xsph) {
+      auto pair = [&](const auto& of_j, const auto& r, const auto& r2, const auto& wk,
                       const auto& gw) SPHFEM_TERM {
         using R = std::decay_t<decltype(r2)>;
-        const R rhoj = at(rho, j);
-        const auto vij = vi - at(v, j);
+        const auto vij = vi - of_j.v;
         const R vr = dot(vij, r);
         R s{};
-        if (decltype(press)::value) s -= P.mass * (pi_rho2 + at(p, j) / (rhoj * rhoj));
-        s += Real(10) * P.viscosity * (P.mass / rhoj) * vr / (r2 + eps2);
+        if (decltype(press)::value) s -= P.mass * (pi_rho2 + of_j.p_rho2);
+        s += Real(10) * P.viscosity * of_j.m_rho * vr / (r2 + eps2);
         if (decltype(av)::value) {
           const R mu = hs * vr / (r2 + eps2);
-          const R push = P.mass * P.alpha_av * P.sound_speed * mu / (Real(0.5) * (rhoi + rhoj));
+          const R push =
+              P.mass * P.alpha_av * P.sound_speed * mu / (Real(0.5) * (rhoi + at(rho, of_j.j)));
           s += vr < Real(0) ? push : R{};
         }
         auto a = gw * s;
-        if (decltype(xsph)::value) a = a - vij * (P.xsph * inv_dt * (P.mass / rhoj) * wk);
+        if (decltype(xsph)::value) a = a - vij * (P.xsph * inv_dt * of_j.m_rho * wk);
         return select(r2 > Real(0), a, decltype(a){});
       };
       // W only for XSPH.
       constexpr bool W = decltype(xsph)::value;
       if (decltype(press)::value) {  // WCSPH; DFSPH takes the warm-start sweep along
-        return sum_fluid_pairs<W, Vec3>(f, g, P.kernel, i, xi, P.h2, pair);
+        return sum_fluid_neighbours<W, Vec3>(P, f, g, i, xi, pair);
       } else {  // (not if constexpr: nvcc's lambdas may not capture there)
         const Real ki = warm_k[i];
-        const auto t = sum_fluid_pairs<W, Both<Vec3, Vec3>>(
-            f, g, P.kernel, i, xi, P.h2,
-            [&](const auto& j, const auto& r, const auto& r2, const auto& wk, const auto& gw)
-                SPHFEM_TERM {
-                  return both(pair(j, r, r2, wk, gw), dfsph_pair_term(P, warm_k, ki, j, gw));
-                });
+        const auto t = sum_fluid_neighbours<W, Both<Vec3, Vec3>>(
+            P, f, g, i, xi,
+            [&](const auto& of_j, const auto& r, const auto& r2, const auto& wk,
+                const auto& gw) SPHFEM_TERM {
+              return both(pair(of_j, r, r2, wk, gw), dfsph_pair_term(P, warm_k, ki, of_j.j, gw));
+            });
         warm_dv[i] = t.b;
         return t.a;
       }
