@@ -97,11 +97,11 @@ double contact_bound(const SceneSize& z) {
 }
 
 double fluid_bytes(double capacity, double wall_samples, double grid_cells, bool dfsph) {
-  // Per particle: x, v, a, tmp (4 x 12 B); rho, p, alpha, kappa, kappa_sum, two warm starts,
-  // tmp (8 x 4 B); nb, flags, nbr_n, nbr_at, id, keys, perm (7 x 4 B); the neighbour lists:
-  // under WCSPH room for about twice the 33 lattice points within the support (the compiled
-  // count is 27 or 33 as the support rounds; the larger is taken), rounded down to a multiple
-  // of eight (64 x 4 B); under DFSPH packed in a pool an eighth longer than they are, 36
+  // Per particle: x, v, a, tmp (4 x 12 B); rho, p, two warm starts, tmp (5 x 4 B), and under
+  // DFSPH alpha, kappa, kappa_sum (3 x 4 B); nb, flags, nbr_n, nbr_at, id, keys, perm (7 x 4 B);
+  // the neighbour lists: under WCSPH room for about twice the 33 lattice points within the support
+  // (the compiled count is 27 or 33 as the support rounds; the larger is taken), rounded down to a
+  // multiple of eight (64 x 4 B); under DFSPH packed in a pool an eighth longer than they are, 36
   // entries a particle (31.5 measured in the dam break and in a tank: fluid neighbours padded
   // to eight, the tank's samples by the walls) of 4 B, with the pairs' kernel factors beside
   // them (4 B more); the radix sort's scratch, grown by a quarter (10 B); the initial x0, v0
@@ -112,9 +112,9 @@ double fluid_bytes(double capacity, double wall_samples, double grid_cells, bool
   // the fluid neighbours of the samples with fluid in reach (WallLists): at most about 0.3 of them
   // a particle (0.27 measured in a half-filled tank, 0.11 in the dam break), each about 10 entries
   // in a pool a quarter longer, and its place and block (62 B).
-  const double lists = dfsph ? 36.0 * 8.0 + 12.0 : 64.0 * 4.0 + 8 * 4.0;
+  const double lists = dfsph ? 36.0 * 8.0 + 12.0 + 3 * 4.0 : 64.0 * 4.0 + 8 * 4.0;
   const double wall_lists = dfsph ? std::min(wall_samples, 0.3 * capacity) * 62.0 : 0.0;
-  return capacity * (4 * 12.0 + 8 * 4.0 + 7 * 4.0 + lists + 10.0 + 24.0) +
+  return capacity * (4 * 12.0 + 5 * 4.0 + 7 * 4.0 + lists + 10.0 + 24.0) +
          wall_samples * (56.0 + 16.0) + wall_lists + grid_cells * 8.0 + kFixedBytes;
 }
 

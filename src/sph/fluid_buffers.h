@@ -49,11 +49,12 @@ struct FluidBuffers {
   // grows to what the lists take (list_and_density).
   static constexpr int kFirstListRoom = 8;
 
-  // Room for cap particles on a grid of `cells` cells; the warm starts begin at 0. factors:
-  // the host also keeps its pairs' kernel factors (DFSPH, whose passes read them a dozen times
-  // a step).
-  void allocate(MemSpace s, int capacity, int full_neighbors, long long cells,
-                bool factors = false) {
+  // Room for cap particles on a grid of `cells` cells; the warm starts begin at 0. dfsph: the
+  // pressure solve's alpha, kappa and kappa_sum, and on the host the pairs' kernel factors
+  // (DFSPH's passes read them a dozen times a step); otherwise (WCSPH) the host's records of
+  // the forces' neighbours.
+  void allocate(MemSpace s, int capacity, int full_neighbors, long long cells, bool dfsph = false) {
+    const bool factors = dfsph;
     cap = capacity;
     // One Vec3 more than the particles: the host's pair lanes read a fourth Real past x_j
     // (lanes::at). They swap with each other, so all four have it.
@@ -61,8 +62,10 @@ struct FluidBuffers {
     // a also holds the positions as planes for the list build, which reads up to seven Reals
     // past the last plane's end (collect_from_planes): two Vec3s more.
     a = Buffer<Vec3>(s, std::size_t(cap) + 3);
-    for (Buffer<Real>* b : {&rho, &p, &alpha, &kappa, &ksum, &warm_div, &warm_dens, &tmpr})
-      *b = Buffer<Real>(s, cap);
+    for (Buffer<Real>* b : {&rho, &p, &warm_div, &warm_dens, &tmpr}) *b = Buffer<Real>(s, cap);
+    // WCSPH's passes never read them: 12 B a particle it does not hold.
+    if (dfsph)
+      for (Buffer<Real>* b : {&alpha, &kappa, &ksum}) *b = Buffer<Real>(s, cap);
     warm_div.zero();
     warm_dens.zero();
     nb = Buffer<int>(s, cap);
@@ -90,7 +93,7 @@ struct FluidBuffers {
     nbr_n = Buffer<int>(s, cap);
     // WCSPH on the host: the forces' records (FluidView::rec_x, rec_v), 32 B a particle; a
     // device reads the arrays, one neighbour a thread.
-    if (s == MemSpace::Host && !factors) records = Buffer<Real>(s, 8 * std::size_t(cap));
+    if (s == MemSpace::Host && !dfsph) records = Buffer<Real>(s, 8 * std::size_t(cap));
     for (Buffer<std::uint32_t>* b : {&id, &keys, &perm}) *b = Buffer<std::uint32_t>(s, cap);
     start = Buffer<std::uint32_t>(s, std::size_t(cells) + 1);
     start.zero();  // no earlier sort (sort_moved)
