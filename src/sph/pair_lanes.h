@@ -78,7 +78,8 @@ SPHFEM_LANE R8 at(const Real* a, const J8& j) {
 SPHFEM_LANE void gather4(const Real* a, std::size_t stride, const J8& j, R8& c0, R8& c1, R8& c2,
                          R8& c3) {
   const std::uint32_t* k = j.k;
-  auto two = [&](int l) {
+  // Inlined by force: with gather4 in more passes, g++ left this as a call in every one.
+  auto two = [&](int l) __attribute__((always_inline)) {
     return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(a + stride * k[l])),
                                 _mm_loadu_ps(a + stride * k[l + 4]), 1);
   };

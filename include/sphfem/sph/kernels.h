@@ -26,9 +26,11 @@ struct CubicSpline : ScalarCalls<CubicSpline> {
   }
   // W and the gradient's scale select between their pieces instead of branching, and take R =
   // Real or a host vector of Reals (sph/pair_lanes.h: ?: selects per lane there), so the host
-  // computes a particle's pairs in vector lanes with these same expressions.
+  // computes a particle's pairs in vector lanes with these same expressions. Always inlined:
+  // where g++ left them as calls, the lanes' passes ran them out of line (their last step is
+  // a select, so a caller's arithmetic cannot fuse with them either way: the same bits).
   template <class R>
-  SPHFEM_HD R W_at(R r) const {
+  SPHFEM_HD_INLINE R W_at(R r) const {
     const R q = r * inv_h;
     const R f = Real(1) - q;
     const R inner = k * (Real(6) * q * q * q - Real(6) * q * q + Real(1));
@@ -38,7 +40,7 @@ struct CubicSpline : ScalarCalls<CubicSpline> {
   }
   // grad W = rij * gscale(r), 0 outside the support and at r = 0.
   template <class R>
-  SPHFEM_HD R gscale_at(R r) const {
+  SPHFEM_HD_INLINE R gscale_at(R r) const {
     const R q = r * inv_h;
     const R f = Real(1) - q;
     const R inner = l * q * (Real(3) * q - Real(2));
@@ -57,7 +59,7 @@ struct WendlandC2 : ScalarCalls<WendlandC2> {
     k = Real(21) / (Real(2) * pi * h * h * h);
   }
   template <class R>
-  SPHFEM_HD R W_at(R r) const {
+  SPHFEM_HD_INLINE R W_at(R r) const {
     const R q = r * inv_h;
     const R f = Real(1) - q;
     const R w = k * f * f * f * f * (Real(1) + Real(4) * q);
@@ -65,7 +67,7 @@ struct WendlandC2 : ScalarCalls<WendlandC2> {
   }
   // dW/dr = -20 k q (1-q)^3 / h; divided by r this is -20 k (1-q)^3 / h^2 (no 1/r singularity).
   template <class R>
-  SPHFEM_HD R gscale_at(R r) const {
+  SPHFEM_HD_INLINE R gscale_at(R r) const {
     const R q = r * inv_h;
     const R f = Real(1) - q;
     const R s = Real(-20) * k * f * f * f * inv_h * inv_h;
