@@ -54,7 +54,6 @@ struct FluidBuffers {
   // (DFSPH's passes read them a dozen times a step); otherwise (WCSPH) the host's records of
   // the forces' neighbours.
   void allocate(MemSpace s, int capacity, int full_neighbors, long long cells, bool dfsph = false) {
-    const bool factors = dfsph;
     cap = capacity;
     // One Vec3 more than the particles: the host's pair lanes read a fourth Real past x_j
     // (lanes::at). They swap with each other, so all four have it.
@@ -82,7 +81,7 @@ struct FluidBuffers {
     // takes its length, not nbr_cap, which pays for the factors beside it. Without factors
     // (WCSPH) the packing's copy would cost time for nothing.
     nbr_interleaved = s == MemSpace::Device;
-    packed = !nbr_interleaved && factors;
+    packed = !nbr_interleaved && dfsph;
     if (packed) {
       nbr_at = Buffer<std::uint32_t>(s, cap);
       warm_dv = Buffer<Vec3>(s, cap);
@@ -161,6 +160,14 @@ struct FluidBuffers {
       }
     }
     stages::density(ex, P, f, g, w, with_alpha, warm);
+  }
+
+  // Points f at the forces' records (FluidView::rec_x, rec_v); false where there are none.
+  bool see_records(stages::FluidView& f) {
+    if (!records.size()) return false;
+    f.rec_x = records.data();
+    f.rec_v = f.rec_x + 4 * std::size_t(cap);
+    return true;
   }
 
   // The first n particles as the stages see them.

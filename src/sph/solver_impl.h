@@ -194,11 +194,7 @@ class SolverT final : public FluidSolver {
     if (wcsph) {
       // What the pairs read of a neighbour, laid out as its records (FluidView::rec_x).
       FluidView fr = f;
-      if (fluid_.records.size()) {
-        fr.rec_x = fluid_.records.data();
-        fr.rec_v = fr.rec_x + 4 * std::size_t(cap_);
-        stages::pair_records(ex_, P_, fr);
-      }
+      if (fluid_.see_records(fr)) stages::pair_records(ex_, P_, fr);
       stages::accelerations(ex_, P_, fr, g, w, true, rdt, nullptr, nullptr);
     } else {
       stages::accelerations(ex_, P_, f, g, w, false, rdt, fluid_.tmpr.data(), fluid_.tmp3.data());
